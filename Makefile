@@ -1,0 +1,119 @@
+# ljgap -- boring on purpose: pkg-config, out-of-tree build/, -MMD -MP, warnings on.
+#   make            build the library, the CLI build/ljgap and the daemon build/ljgapd
+#   make test       install what is missing, build, run every test (last line: tests: N passed, N failed)
+#   make run        install what is missing, build, serve on $(PORT) with the page from web/
+#   make bench      build and run the benchmarks (writes bench/results/)
+#   make deps       install missing Debian packages (apt-get)
+#   SANITIZE=address,undefined   sanitizer build in build/san/
+#   V=1             show commands
+
+PORT ?= 8080
+PKGS := libmicrohttpd libcjson gsl cmocka
+DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev curl jq
+
+ifdef SANITIZE
+BUILD ?= build/san
+SANFLAGS := -fsanitize=$(SANITIZE) -fno-omit-frame-pointer
+else
+BUILD ?= build
+SANFLAGS :=
+endif
+
+ifeq ($(V),1)
+Q :=
+else
+Q := @
+endif
+
+PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+
+CC ?= cc
+OPT ?= -O2
+CFLAGS ?= $(OPT) -g
+WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
+        -Wno-unused-parameter
+ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver \
+              $(PKG_CFLAGS) -MMD -MP
+LDLIBS := $(PKG_LIBS) -lpthread -lm
+ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)
+
+CORE_SRC := $(wildcard core/*.c)
+SERVER_SRC := $(filter-out server/cli.c server/ljgapd.c,$(wildcard server/*.c))
+CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
+SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o)
+LIBCORE := $(BUILD)/libljgap.a
+LIBSERVER := $(BUILD)/libljgap_server.a
+
+UNIT_SRC := $(wildcard tests/unit/*.c)
+UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+BENCH_SRC := $(wildcard bench/*.c)
+BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
+
+PROGS := $(BUILD)/ljgap $(BUILD)/ljgapd
+
+.PHONY: all test run deps check-deps bench clean format
+all: $(PROGS) $(UNIT_BIN) $(BENCH_BIN)
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(ALL_CFLAGS) -c $< -o $@
+
+$(LIBCORE): $(CORE_OBJ)
+	$(Q)$(AR) rcs $@ $^
+
+$(LIBSERVER): $(SERVER_OBJ)
+	$(Q)$(AR) rcs $@ $^
+
+$(BUILD)/ljgap: $(BUILD)/server/cli.o $(LIBSERVER) $(LIBCORE)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
+
+$(BUILD)/ljgapd: $(BUILD)/server/ljgapd.o $(LIBSERVER) $(LIBCORE)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
+
+$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBSERVER) $(LIBCORE)
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
+
+$(BUILD)/bench/%: $(BUILD)/bench/%.o $(LIBSERVER) $(LIBCORE)
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
+
+# Install what a fresh Debian machine lacks, only when something is missing.
+check-deps:
+	@pkg-config --exists $(PKGS) 2>/dev/null && command -v curl >/dev/null && command -v jq >/dev/null \
+	  || $(MAKE) --no-print-directory deps
+
+deps:
+	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
+	else echo "deps: all present"; fi
+
+# The recursive make re-reads pkg-config after check-deps may have installed libraries.
+test: check-deps
+	@$(MAKE) --no-print-directory all
+	@BUILD=$(BUILD) tests/run.sh
+
+run: check-deps
+	@$(MAKE) --no-print-directory all
+	$(BUILD)/ljgapd --port $(PORT) --web web
+
+bench: check-deps
+	@$(MAKE) --no-print-directory all
+	@BUILD=$(BUILD) bench/run.sh
+
+format:
+	clang-format -i include/*.h core/*.c server/*.c server/*.h tests/unit/*.c bench/*.c
+
+clean:
+	rm -rf build
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

@@ -1,0 +1,40 @@
+/* handler.h -- the one request handler behind the CLI, the HTTP daemon and the fuzzer.
+ *
+ * A pure function: endpoint name + JSON request body -> HTTP status + JSON body
+ * (shared/docs/api.md). It validates (422 problem+json with a JSON pointer per bad field),
+ * converts to core calls, and serialises results. It never touches sockets or files.
+ */
+#ifndef LJGAP_HANDLER_H
+#define LJGAP_HANDLER_H
+
+#include <stddef.h>
+
+typedef struct {
+    int status;               /* HTTP status code */
+    char *body;               /* malloc'd, NUL-terminated JSON; free with ljgap_reply_free */
+    size_t len;               /* strlen(body) */
+    const char *content_type; /* "application/json" or "application/problem+json" */
+} ljgap_reply;
+
+/* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
+typedef struct {
+    double max_seconds;  /* wall-time cap of one computation (default 20) */
+    long max_samples;    /* montecarlo samples cap (default 1e6) */
+    long max_points;     /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
+    const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
+} ljgap_limits;
+
+void ljgap_limits_default(ljgap_limits *l);
+/* The limits used by ljgap_handle (defaults until set). Not thread-safe: call at start-up. */
+void ljgap_handler_set_limits(const ljgap_limits *l);
+
+/* Endpoint names: "adhesion", "traction", "pdf", "sweep" (later "contact").
+ * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
+ * memory runs out). Thread-safe. */
+void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
+void ljgap_reply_free(ljgap_reply *r);
+
+/* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
+int ljgap_handler_has(const char *endpoint);
+
+#endif
