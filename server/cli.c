@@ -1,0 +1,93 @@
+/* cli.c -- build/ljgap: the request handler on the command line.
+ *
+ *   ljgap NAME [FILE]     read the request for endpoint NAME from FILE (or stdin), print the
+ *                         answer body (one line) on stdout
+ *
+ * The same contract as POST /v1/NAME (shared/docs/api.md): exit status 0 for a 2xx answer,
+ * 1 for a problem (whose body is still printed on stdout), 2 when the command line is wrong
+ * or the request cannot be read. A thin shell: all the work is in ljgap_handle.
+ */
+#include "handler.h"
+#include "ljgap.h"
+
+#include <errno.h>
+#include <gsl/gsl_errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: ljgap NAME [FILE]\n"
+               "       ljgap --help | --version\n"
+               "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep) from FILE\n"
+               "or standard input and prints the JSON answer on standard output.\n"
+               "Exit status: 0 for a 2xx answer, 1 for a problem answer, 2 for a usage or\n"
+               "read error. See shared/docs/api.md for the fields.\n");
+}
+
+/* Reads all of f into a malloc'd, NUL-terminated buffer; NULL on error (errno set). */
+static char *read_all(FILE *f, size_t *len)
+{
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap), *bigger;
+    while (buf) {
+        n += fread(buf + n, 1, cap - n - 1, f);
+        if (n < cap - 1) break;
+        if (!(bigger = realloc(buf, cap *= 2))) {
+            free(buf);
+            return NULL;
+        }
+        buf = bigger;
+    }
+    if (!buf) return NULL;
+    if (ferror(f)) {
+        free(buf);
+        return NULL;
+    }
+    buf[n] = '\0';
+    *len = n;
+    return buf;
+}
+
+int main(int argc, char **argv)
+{
+    FILE *in = stdin;
+    char *body = NULL;
+    size_t len = 0;
+    ljgap_reply rep = {0};
+    int rc = 2;
+    gsl_set_error_handler_off();
+    if (argc == 2 && strcmp(argv[1], "--help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    if (argc == 2 && strcmp(argv[1], "--version") == 0) {
+        printf("ljgap %s\n", LJGAP_VERSION);
+        return 0;
+    }
+    if (argc < 2 || argc > 3 || argv[1][0] == '-') {
+        usage(stderr);
+        return 2;
+    }
+    if (argc == 3 && strcmp(argv[2], "-") != 0 && !(in = fopen(argv[2], "rb"))) {
+        fprintf(stderr, "ljgap: %s: %s\n", argv[2], strerror(errno));
+        goto end;
+    }
+    if (!(body = read_all(in, &len))) {
+        fprintf(stderr, "ljgap: cannot read the request: %s\n", strerror(errno));
+        goto end;
+    }
+    ljgap_handle(argv[1], body, len, &rep);
+    if (fwrite(rep.body, 1, rep.len, stdout) != rep.len || putchar('\n') == EOF ||
+        fflush(stdout) != 0) {
+        fprintf(stderr, "ljgap: cannot write the answer: %s\n", strerror(errno));
+        goto end;
+    }
+    rc = rep.status >= 200 && rep.status < 300 ? 0 : 1;
+end:
+    ljgap_reply_free(&rep);
+    free(body);
+    if (in && in != stdin) fclose(in);
+    return rc;
+}

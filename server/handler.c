@@ -1,0 +1,558 @@
+/* handler.c -- the request handler: endpoint name + JSON body -> status + JSON body.
+ *
+ * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle. It parses the
+ * body with cJSON, validates it (request.c: every bad field reported with a JSON pointer),
+ * builds the PSD, calls the core (include/ljgap.h) and serialises the answer exactly as
+ * shared/docs/api.md fixes it. It is a pure function of its arguments and of the limits set
+ * at start-up, so it is thread-safe: nothing else here is mutable and shared.
+ *
+ * Two rules hold for every answer:
+ *   - no NaN or Inf goes out: put_num writes null instead and says why in meta.warnings;
+ *   - every 2xx answer has meta {method, elapsed_ms (measured here), version, warnings,
+ *     cached}, and the core's warnings are copied into meta.warnings.
+ *
+ * Problem types: the "type" member of every application/problem+json answer
+ * (openapi.json lists the same set; keep them in step):
+ *   https://ljgap.example/problems/malformed-json  400  the body is not one valid JSON value
+ *   https://ljgap.example/problems/not-found       404  no such endpoint
+ *   https://ljgap.example/problems/validation      422  valid JSON, bad values: errors[] has
+ *                                                       one {pointer, detail} per bad field
+ *   https://ljgap.example/problems/outside-model   422  the core found the input outside the
+ *                                                       model's domain (LJGAP_EINVAL),
+ *                                                       pointer "/psd"
+ *   https://ljgap.example/problems/cap-exceeded    422  the computation needs more than the
+ *                                                       server's caps (LJGAP_ECAP)
+ *   https://ljgap.example/problems/no-answer       422  no finite answer could be formed
+ *                                                       (LJGAP_EFAIL)
+ *   https://ljgap.example/problems/unavailable     503  the computation was cancelled
+ *                                                       (server shutting down, LJGAP_ECANCEL)
+ *   https://ljgap.example/problems/out-of-memory   500  an allocation failed (LJGAP_ENOMEM)
+ * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
+ */
+#include "handler.h"
+#include "request.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CT_JSON "application/json"
+#define CT_PROBLEM "application/problem+json"
+#define DETAIL_LEN (LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400)
+
+typedef struct {
+    int status;
+    const char *type;
+    const char *title;
+} problem_kind;
+
+#define PROBLEM(s, slug, title)                                                                    \
+    {                                                                                              \
+        s, "https://ljgap.example/problems/" slug, title                                           \
+    }
+static const problem_kind P_MALFORMED = PROBLEM(400, "malformed-json", "Malformed JSON");
+static const problem_kind P_NOT_FOUND = PROBLEM(404, "not-found", "No such endpoint");
+static const problem_kind P_VALIDATION = PROBLEM(422, "validation", "Invalid request");
+static const problem_kind P_OUTSIDE = PROBLEM(422, "outside-model", "Outside the model");
+static const problem_kind P_CAP = PROBLEM(422, "cap-exceeded", "Exceeds the server's caps");
+static const problem_kind P_NO_ANSWER = PROBLEM(422, "no-answer", "No finite answer");
+static const problem_kind P_UNAVAILABLE = PROBLEM(503, "unavailable", "Computation cancelled");
+static const problem_kind P_OOM = PROBLEM(500, "out-of-memory", "Out of memory");
+
+/* Sent when not even a problem can be allocated; never freed (see ljgap_reply_free). */
+static char oom_body[] = "{\"type\":\"https://ljgap.example/problems/out-of-memory\","
+                         "\"title\":\"Out of memory\",\"status\":500,"
+                         "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
+
+static const ljgap_limits limits_default = {
+    .max_seconds = 20.0, .max_samples = 1000000, .max_points = 10000, .cancel = NULL};
+static ljgap_limits limits = limits_default; /* written only by ljgap_handler_set_limits */
+
+void ljgap_limits_default(ljgap_limits *l)
+{
+    *l = limits_default;
+}
+
+void ljgap_handler_set_limits(const ljgap_limits *l)
+{
+    limits = *l;
+}
+
+/* One computation: the validated request and the answer being built. */
+typedef struct {
+    ljgap_request rq;      /* what was asked; rq.warn collects every warning */
+    cJSON *ans;            /* the answer object */
+    double deadline;       /* ljgap_now() value when the time cap runs out */
+    int oom;               /* an allocation failed while building ans */
+    char fail[DETAIL_LEN]; /* extra detail for a failed status, "" or starting with a space */
+} job;
+
+/* ---- replies ---- */
+
+static void reply_oom(ljgap_reply *out)
+{
+    out->status = P_OOM.status;
+    out->body = oom_body;
+    out->len = strlen(oom_body);
+    out->content_type = CT_PROBLEM;
+}
+
+/* Serialises doc into out; doc stays the caller's. */
+static void reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc)
+{
+    char *s = cJSON_PrintUnformatted(doc);
+    if (!s) {
+        reply_oom(out);
+        return;
+    }
+    out->status = status;
+    out->body = s;
+    out->len = strlen(s);
+    out->content_type = ctype;
+}
+
+/* A problem answer; takes errors (an array, or NULL for an empty one). */
+static void reply_problem(ljgap_reply *out, const problem_kind *k, const char *detail,
+                          cJSON *errors)
+{
+    cJSON *p = cJSON_CreateObject();
+    if (!errors) errors = cJSON_CreateArray();
+    if (!p || !errors || !cJSON_AddStringToObject(p, "type", k->type) ||
+        !cJSON_AddStringToObject(p, "title", k->title) ||
+        !cJSON_AddNumberToObject(p, "status", k->status) ||
+        !cJSON_AddStringToObject(p, "detail", detail) ||
+        !cJSON_AddItemToObject(p, "errors", errors)) {
+        cJSON_Delete(errors);
+        reply_oom(out);
+        goto end;
+    }
+    reply_json(out, k->status, CT_PROBLEM, p);
+end:
+    cJSON_Delete(p);
+}
+
+void ljgap_reply_free(ljgap_reply *r)
+{
+    if (!r) return;
+    if (r->body != oom_body) free(r->body);
+    r->body = NULL;
+    r->len = 0;
+}
+
+/* ---- building answers ---- */
+
+/* Adds item to parent (object member key, or array element when key is NULL). */
+static cJSON *put(job *j, cJSON *parent, const char *key, cJSON *item)
+{
+    int ok = item && parent &&
+             (key ? cJSON_AddItemToObject(parent, key, item) : cJSON_AddItemToArray(parent, item));
+    if (!ok) {
+        cJSON_Delete(item);
+        j->oom = 1;
+        return NULL;
+    }
+    return item;
+}
+
+/* Adds the number v, or null with a warning naming label (and [idx] when idx >= 0) when v is
+ * not finite: no NaN or Inf ever goes out. */
+static void put_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx)
+{
+    if (isfinite(v)) {
+        put(j, parent, key, cJSON_CreateNumber(v));
+        return;
+    }
+    put(j, parent, key, cJSON_CreateNull());
+    if (idx >= 0)
+        ljgap_warn(&j->rq.warn, "%s[%ld] is not a finite number (%g) and is given as null", label,
+                   idx, v);
+    else
+        ljgap_warn(&j->rq.warn, "%s is not a finite number (%g) and is given as null", label, v);
+}
+
+/* An array of n numbers, each through put_num. */
+static cJSON *put_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
+                       size_t stride, const char *label)
+{
+    cJSON *a = put(j, parent, key, cJSON_CreateArray());
+    for (size_t i = 0; a && i < n; i++)
+        put_num(j, a, NULL, *(const double *)((const char *)x + i * stride), label, (long)i);
+    return a;
+}
+
+/* The estimated fields of ljgap_summary, in contract order. */
+static const struct {
+    const char *name;
+    size_t off;
+} est_fields[] = {
+    {"g_eq", offsetof(ljgap_summary, g_eq)},
+    {"sigma_max", offsetof(ljgap_summary, sigma_max)},
+    {"g_at_max", offsetof(ljgap_summary, g_at_max)},
+    {"dgamma_eff", offsetof(ljgap_summary, dgamma_eff)},
+};
+#define N_EST (sizeof est_fields / sizeof est_fields[0])
+
+static const ljgap_est *est_of(const ljgap_summary *s, size_t i)
+{
+    return (const ljgap_est *)((const char *)s + est_fields[i].off);
+}
+
+/* The adhesion fields of s into obj and their errors into a new object obj.error_key (all
+ * null when s is NULL: the reason is already a warning). */
+static void put_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+                        const ljgap_summary *s)
+{
+    cJSON *err = cJSON_CreateObject();
+    for (size_t i = 0; i < N_EST; i++) {
+        const char *name = est_fields[i].name;
+        if (s) {
+            put_num(j, obj, name, est_of(s, i)->value, name, -1);
+            put_num(j, err, name, est_of(s, i)->err, name, -1);
+        } else {
+            put(j, obj, name, cJSON_CreateNull());
+            put(j, err, name, cJSON_CreateNull());
+        }
+    }
+    if (s)
+        put_num(j, obj, "m0", s->m0, "m0", -1);
+    else
+        put(j, obj, "m0", cJSON_CreateNull());
+    put_num(j, obj, "k0", ljgap_k0(), "k0", -1);
+    put(j, err_parent, err_key, err);
+}
+
+static void put_meta(job *j, double t0)
+{
+    cJSON *meta = put(j, j->ans, "meta", cJSON_CreateObject());
+    cJSON *w;
+    put(j, meta, "method", cJSON_CreateString(j->rq.method));
+    put(j, meta, "elapsed_ms", cJSON_CreateNumber((ljgap_now() - t0) * 1e3));
+    put(j, meta, "version", cJSON_CreateString(LJGAP_VERSION));
+    w = put(j, meta, "warnings", cJSON_CreateArray());
+    for (int i = 0; w && i < j->rq.warn.n; i++)
+        put(j, w, NULL, cJSON_CreateString(j->rq.warn.msg[i]));
+    put(j, meta, "cached", cJSON_CreateFalse());
+}
+
+/* Core options for one call: the request's, capped by what is left of the time budget. */
+static int opts_now(job *j, ljgap_opts *o)
+{
+    *o = j->rq.opts;
+    o->max_seconds = j->deadline - ljgap_now();
+    o->cancel = limits.cancel;
+    if (o->max_seconds > 0) return LJGAP_OK;
+    snprintf(j->fail, sizeof j->fail, " (the request's time budget ran out before this step)");
+    return LJGAP_ECAP;
+}
+
+/* ---- endpoints ---- */
+
+/* Core options and the PSD for one core call (free psd after, on success). */
+static int prepare(job *j, const ljgap_psd_spec *spec, ljgap_psd *psd, ljgap_opts *o,
+                   ljgap_warnings *w)
+{
+    int st = opts_now(j, o);
+    if (st) return st;
+    st = ljgap_psd_from_spec(psd, spec);
+    if (st == LJGAP_EINVAL)
+        ljgap_warn(w, "the PSD could not be formed: its variance is not a finite positive "
+                      "number");
+    return st;
+}
+
+/* Summary of the PSD in spec: one ljgap_traction call with no points. */
+static int summarise(job *j, const ljgap_psd_spec *spec, ljgap_summary *sum, ljgap_warnings *w)
+{
+    ljgap_psd psd;
+    ljgap_opts o;
+    int st = prepare(j, spec, &psd, &o, w);
+    if (st) return st;
+    st = ljgap_traction(&psd, &o, NULL, 0, NULL, sum, w);
+    ljgap_psd_free(&psd);
+    return st;
+}
+
+static int run_adhesion(job *j)
+{
+    ljgap_summary sum;
+    int st = summarise(j, &j->rq.psd, &sum, &j->rq.warn);
+    if (st) return st;
+    put_summary(j, j->ans, j->ans, "error", &sum);
+    return LJGAP_OK;
+}
+
+static int run_traction(job *j)
+{
+    const ljgap_request *rq = &j->rq;
+    ljgap_summary sum;
+    ljgap_est *sigma = malloc(rq->nx * sizeof *sigma);
+    ljgap_psd psd;
+    ljgap_opts o;
+    cJSON *err, *sum_obj;
+    int st = sigma ? prepare(j, &rq->psd, &psd, &o, &j->rq.warn) : LJGAP_ENOMEM;
+    if (st) goto end;
+    st = ljgap_traction(&psd, &o, rq->x, rq->nx, sigma, &sum, &j->rq.warn);
+    ljgap_psd_free(&psd);
+    if (st) goto end;
+    put_nums(j, j->ans, "g_ave", rq->x, rq->nx, sizeof *rq->x, "g_ave");
+    put_nums(j, j->ans, "sigma", &sigma[0].value, rq->nx, sizeof *sigma, "sigma");
+    sum_obj = put(j, j->ans, "summary", cJSON_CreateObject());
+    err = put(j, j->ans, "error", cJSON_CreateObject());
+    put_nums(j, err, "sigma", &sigma[0].err, rq->nx, sizeof *sigma, "error.sigma");
+    put_summary(j, sum_obj, err, "summary", &sum);
+end:
+    free(sigma);
+    return st;
+}
+
+static int run_pdf(job *j)
+{
+    const ljgap_request *rq = &j->rq;
+    ljgap_pdf *p = calloc(rq->nx, sizeof *p);
+    ljgap_psd psd;
+    ljgap_opts o;
+    cJSON *pdfs, *errs;
+    int st = p ? prepare(j, &rq->psd, &psd, &o, &j->rq.warn) : LJGAP_ENOMEM;
+    if (st) goto end;
+    st = ljgap_pdf_compute(&psd, &o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL, p,
+                           &j->rq.warn);
+    ljgap_psd_free(&psd);
+    if (st) goto end;
+    pdfs = put(j, j->ans, "pdfs", cJSON_CreateArray());
+    errs = put(j, put(j, j->ans, "error", cJSON_CreateObject()), "pdfs", cJSON_CreateArray());
+    for (size_t i = 0; pdfs && errs && i < rq->nx; i++) {
+        cJSON *s = put(j, pdfs, NULL, cJSON_CreateObject());
+        cJSON *e = put(j, errs, NULL, cJSON_CreateObject());
+        if (isinf(p[i].k2))
+            put(j, s, "k2", cJSON_CreateNull()); /* null = ∞ by contract */
+        else
+            put_num(j, s, "k2", p[i].k2, "pdfs.k2", (long)i);
+        put_nums(j, s, "g", p[i].g, p[i].n, sizeof *p[i].g, "pdfs.g");
+        put_nums(j, s, "phi", p[i].phi, p[i].n, sizeof *p[i].phi, "pdfs.phi");
+        put_num(j, s, "mass", p[i].mass, "pdfs.mass", (long)i);
+        put_num(j, s, "mean", p[i].mean, "pdfs.mean", (long)i);
+        put_num(j, s, "sigma", p[i].sigma.value, "pdfs.sigma", (long)i);
+        put_num(j, e, "phi_l1", p[i].phi_err, "error.pdfs.phi_l1", (long)i);
+        put_num(j, e, "sigma", p[i].sigma.err, "error.pdfs.sigma", (long)i);
+    }
+end:
+    if (p) ljgap_pdf_release(p, rq->nx);
+    free(p);
+    return st;
+}
+
+/* One value of a sweep failed without a finite answer: its fields are null, and a warning
+ * says why; the sweep goes on. Any other failure ends the sweep. */
+static int run_sweep(job *j)
+{
+    ljgap_request *rq = &j->rq;
+    cJSON *results;
+    size_t failed = 0;
+    put(j, j->ans, "vary", cJSON_CreateString(rq->vary_name));
+    put_nums(j, j->ans, "values", rq->x, rq->nx, sizeof *rq->x, "values");
+    results = put(j, j->ans, "results", cJSON_CreateArray());
+    for (size_t i = 0; results && i < rq->nx; i++) {
+        ljgap_psd_spec spec = rq->psd;
+        ljgap_summary sum;
+        ljgap_warnings w = {0};
+        cJSON *r = put(j, results, NULL, cJSON_CreateObject());
+        int st;
+        switch (rq->vary) {
+        case LJGAP_VARY_M0:
+            spec.level = LJGAP_LEVEL_M0, spec.level_val = rq->x[i];
+            break;
+        case LJGAP_VARY_C:
+            spec.level = LJGAP_LEVEL_C, spec.level_val = rq->x[i];
+            break;
+        case LJGAP_VARY_D:
+            spec.D = rq->x[i];
+            break;
+        case LJGAP_VARY_K1:
+            spec.k1 = rq->x[i];
+            break;
+        }
+        st = summarise(j, &spec, &sum, &w);
+        for (int k = 0; k < w.n; k++)
+            ljgap_warn(&rq->warn, "values[%zu]: %s", i, w.msg[k]);
+        if (st && st != LJGAP_EFAIL) {
+            snprintf(j->fail, sizeof j->fail, " (at values[%zu] = %g)", i, rq->x[i]);
+            return st;
+        }
+        if (st) failed++;
+        put_summary(j, r, r, "error", st ? NULL : &sum);
+    }
+    if (failed == rq->nx) {
+        snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
+        return LJGAP_EFAIL;
+    }
+    return LJGAP_OK;
+}
+
+/* ---- routing ---- */
+
+typedef struct {
+    const char *name;
+    ljgap_endpoint ep;
+    int (*run)(job *j);
+} route;
+
+static const route routes[] = {
+    {"adhesion", LJGAP_EP_ADHESION, run_adhesion},
+    {"traction", LJGAP_EP_TRACTION, run_traction},
+    {"pdf", LJGAP_EP_PDF, run_pdf},
+    {"sweep", LJGAP_EP_SWEEP, run_sweep},
+};
+
+static const route *route_find(const char *name)
+{
+    for (size_t i = 0; name && i < sizeof routes / sizeof routes[0]; i++)
+        if (strcmp(name, routes[i].name) == 0) return &routes[i];
+    return NULL;
+}
+
+int ljgap_handler_has(const char *endpoint)
+{
+    return route_find(endpoint) != NULL;
+}
+
+/* "; "-joined warnings after prefix into buf. */
+static void join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
+{
+    size_t used = (size_t)snprintf(buf, size, "%s", prefix);
+    for (int i = 0; i < w->n && used < size; i++)
+        used += (size_t)snprintf(buf + used, size - used, "%s%s", i ? "; " : ": ", w->msg[i]);
+}
+
+/* The problem for a failed core status. */
+static void reply_status(ljgap_reply *out, int st, const job *j)
+{
+    char detail[DETAIL_LEN], head[DETAIL_LEN + 200];
+    cJSON *errors = NULL, *e = NULL;
+    switch (st) {
+    case LJGAP_EINVAL:
+        join_warnings(detail, sizeof detail, "the PSD is outside the model's domain", &j->rq.warn);
+        errors = cJSON_CreateArray();
+        e = cJSON_CreateObject();
+        if (!errors || !e || !cJSON_AddStringToObject(e, "pointer", "/psd") ||
+            !cJSON_AddStringToObject(e, "detail", detail) || !cJSON_AddItemToArray(errors, e)) {
+            cJSON_Delete(e);
+            cJSON_Delete(errors);
+            reply_oom(out);
+            return;
+        }
+        reply_problem(out, &P_OUTSIDE, detail, errors);
+        return;
+    case LJGAP_ECAP:
+        snprintf(head, sizeof head,
+                 "the computation needs more than the server's caps allow "
+                 "(max_seconds = %g s of wall time per request, max_work = %ld grid "
+                 "point-steps); ask for a larger tol or fewer points%s",
+                 limits.max_seconds, j->rq.opts.max_work, j->fail);
+        join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        reply_problem(out, &P_CAP, detail, NULL);
+        return;
+    case LJGAP_EFAIL:
+        snprintf(head, sizeof head, "no finite answer could be formed%s", j->fail);
+        join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        reply_problem(out, &P_NO_ANSWER, detail, NULL);
+        return;
+    case LJGAP_ECANCEL:
+        reply_problem(out, &P_UNAVAILABLE,
+                      "the computation was cancelled (the server is "
+                      "shutting down); try again",
+                      NULL);
+        return;
+    default:
+        reply_oom(out);
+        return;
+    }
+}
+
+/* Parses exactly one JSON value filling body[0..len); NULL with *where set when it is not. */
+static cJSON *parse_body(const char *body, size_t len, size_t *where)
+{
+    const char *end = body;
+    cJSON *root = body && len ? cJSON_ParseWithLengthOpts(body, len, &end, 0) : NULL;
+    if (!root) {
+        *where = end && body ? (size_t)(end - body) : 0;
+        return NULL;
+    }
+    while ((size_t)(end - body) < len && *end && strchr(" \t\r\n", *end))
+        end++;
+    if ((size_t)(end - body) < len) {
+        *where = (size_t)(end - body);
+        cJSON_Delete(root);
+        return NULL;
+    }
+    return root;
+}
+
+void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+{
+    double t0 = ljgap_now();
+    const route *r = route_find(endpoint);
+    cJSON *root = NULL;
+    ljgap_verr ve = {0};
+    job j;
+    char detail[DETAIL_LEN];
+    size_t where = 0;
+    int st;
+    memset(&j, 0, sizeof j);
+    memset(out, 0, sizeof *out);
+    if (!r) {
+        snprintf(detail, sizeof detail,
+                 "no endpoint \"%.60s\": the endpoints are adhesion, "
+                 "traction, pdf and sweep",
+                 endpoint ? endpoint : "");
+        reply_problem(out, &P_NOT_FOUND, detail, NULL);
+        goto end;
+    }
+    if (!(root = parse_body(body, len, &where))) {
+        snprintf(detail, sizeof detail,
+                 "the body is not one valid JSON value (error at byte "
+                 "%zu of %zu)",
+                 where, len);
+        reply_problem(out, &P_MALFORMED, detail, NULL);
+        goto end;
+    }
+    if (!(ve.errors = cJSON_CreateArray())) {
+        reply_oom(out);
+        goto end;
+    }
+    if (ljgap_request_parse(r->ep, root, &limits, &j.rq, &ve) || ve.oom) {
+        if (ve.oom) {
+            reply_oom(out);
+            goto end;
+        }
+        if (ve.n > LJGAP_MAX_ERRORS)
+            snprintf(detail, sizeof detail,
+                     "%d problems in the request; the first %d are "
+                     "listed in errors",
+                     ve.n, LJGAP_MAX_ERRORS);
+        else
+            snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve.n,
+                     ve.n == 1 ? "" : "s");
+        reply_problem(out, &P_VALIDATION, detail, ve.errors);
+        ve.errors = NULL; /* reply_problem took it */
+        goto end;
+    }
+    j.deadline = t0 + limits.max_seconds;
+    if (!(j.ans = cJSON_CreateObject())) {
+        reply_oom(out);
+        goto end;
+    }
+    st = r->run(&j);
+    if (!st) put_meta(&j, t0);
+    if (!st && j.oom) st = LJGAP_ENOMEM;
+    if (st)
+        reply_status(out, st, &j);
+    else
+        reply_json(out, 200, CT_JSON, j.ans);
+end:
+    cJSON_Delete(root);
+    cJSON_Delete(ve.errors);
+    cJSON_Delete(j.ans);
+    ljgap_request_free(&j.rq);
+}

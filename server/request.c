@@ -1,0 +1,614 @@
+/* request.c -- validation of compute requests (shared/docs/api.md) into ljgap_request.
+ *
+ * Bad input is the caller's: everything the contract rules out is caught here, before the
+ * core runs, and reported with a JSON pointer (RFC 6901) and one clear sentence. The walk
+ * does not stop at the first problem: every field is checked and every problem recorded
+ * (up to LJGAP_MAX_ERRORS; the count of the rest goes into the problem's detail), so a
+ * caller fixes a request in one round trip.
+ *
+ * Unknown fields, at the top level and inside psd, g_ave, grid and tail, are rejected
+ * too: they are usually typos ("m_0", "tolerance") that would otherwise be silently
+ * ignored. The contract may add fields later (api.md: "Fields may be added"); each one
+ * added must then be listed in the tables below.
+ *
+ * The rules of the model itself (theory.md §1): 2 < D < 3 for the quasi-fractal PSD (6),
+ * k1 > k0 ≈ 0.46978 (below k0 the gap transfer (14) has a pole, the negative-stiffness
+ * instability of (19)), k2 > k1, and positive finite levels.
+ */
+#include "request.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PSD_TABLE_MAX 10000
+#define SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
+#define PTR_LEN 96                  /* room for every pointer built from known names */
+
+static const char *const common_fields[] = {"psd",     "method", "tol", "vmax",
+                                            "samples", "seed",   NULL};
+static const char *const traction_fields[] = {"g_ave", NULL};
+static const char *const pdf_fields[] = {"g_ave", "k2", "grid", NULL};
+static const char *const sweep_fields[] = {"vary", "values", NULL};
+static const char *const power_fields[] = {"kind", "D", "H", "k1", "k2", "C", "m0", "h_rms", NULL};
+static const char *const table_fields[] = {"kind", "k", "P", "tail", NULL};
+static const char *const tail_fields[] = {"exponent", NULL};
+static const char *const range_fields[] = {"min", "max", "n", NULL};
+
+void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
+{
+    char detail[400];
+    va_list ap;
+    cJSON *item = NULL;
+    e->n++;
+    if (e->n > LJGAP_MAX_ERRORS) return;
+    va_start(ap, fmt);
+    vsnprintf(detail, sizeof detail, fmt, ap);
+    va_end(ap);
+    item = cJSON_CreateObject();
+    if (!item || !cJSON_AddStringToObject(item, "pointer", ptr) ||
+        !cJSON_AddStringToObject(item, "detail", detail)) {
+        e->oom = 1;
+        cJSON_Delete(item);
+        return;
+    }
+    cJSON_AddItemToArray(e->errors, item);
+}
+
+/* Pointer base + "/" + key with ~ and / escaped (RFC 6901 §3); malloc'd, NULL on OOM. */
+static char *ptr_key(const char *base, const char *key)
+{
+    size_t n = strlen(base) + 2;
+    for (const char *c = key; *c; c++)
+        n += (*c == '~' || *c == '/') ? 2 : 1;
+    char *p = malloc(n), *o;
+    if (!p) return NULL;
+    o = p + sprintf(p, "%s/", base);
+    for (const char *c = key; *c; c++) {
+        if (*c == '~')
+            *o++ = '~', *o++ = '0';
+        else if (*c == '/')
+            *o++ = '~', *o++ = '1';
+        else
+            *o++ = *c;
+    }
+    *o = '\0';
+    return p;
+}
+
+static int in_list(const char *name, const char *const *list)
+{
+    for (; list && *list; list++)
+        if (strcmp(name, *list) == 0) return 1;
+    return 0;
+}
+
+/* Every member of obj (pointer base) must be named in a or b, and appear once. */
+static void only_fields(ljgap_verr *e, const cJSON *obj, const char *base, const char *const *a,
+                        const char *const *b)
+{
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int known = in_list(it->string, a) || in_list(it->string, b);
+        int dup = 0;
+        /* only known names are looked for again: a bounded number of them */
+        for (const cJSON *p = obj->child; known && p != it; p = p->next)
+            dup = dup || strcmp(p->string, it->string) == 0;
+        if (known && !dup) continue;
+        char *ptr = ptr_key(base, it->string);
+        if (!ptr) {
+            e->oom = 1;
+            return;
+        }
+        if (dup)
+            ljgap_verr_add(e, ptr, "field \"%s\" appears more than once", it->string);
+        else if (strcmp(it->string, "material") == 0 || strcmp(it->string, "units") == 0)
+            ljgap_verr_add(e, ptr,
+                           "physical units (\"%s\") are not supported yet; give the "
+                           "dimensionless form (theory.md §1)",
+                           it->string);
+        else
+            ljgap_verr_add(e, ptr,
+                           "unknown field \"%.60s\" (a typo? it is not part of this "
+                           "request in the v1 contract)",
+                           it->string);
+        free(ptr);
+    }
+}
+
+static const cJSON *member(const cJSON *obj, const char *name)
+{
+    return cJSON_GetObjectItemCaseSensitive(obj, name);
+}
+
+/* obj[name], recording "missing" at base/name when absent. */
+static const cJSON *required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+                             const char *what)
+{
+    const cJSON *it = member(obj, name);
+    if (!it) {
+        char ptr[PTR_LEN];
+        snprintf(ptr, sizeof ptr, "%s/%s", base, name);
+        ljgap_verr_add(e, ptr, "missing required field \"%s\" (%s)", name, what);
+    }
+    return it;
+}
+
+/* A finite JSON number at it (pointer ptr) into *x; records the problem and returns 0 if not. */
+static int num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+{
+    if (!cJSON_IsNumber(it)) {
+        ljgap_verr_add(e, ptr, "must be a number");
+        return 0;
+    }
+    if (!isfinite(it->valuedouble)) {
+        ljgap_verr_add(e, ptr, "must be a finite number (this one overflows a double)");
+        return 0;
+    }
+    *x = it->valuedouble;
+    return 1;
+}
+
+/* A finite number > 0. */
+static int num_pos(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+{
+    if (!num(e, it, ptr, x)) return 0;
+    if (!(*x > 0)) {
+        ljgap_verr_add(e, ptr, "must be positive (got %g)", *x);
+        return 0;
+    }
+    return 1;
+}
+
+/* An integer-valued number in [lo, hi]. */
+static int num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi, double *x)
+{
+    if (!num(e, it, ptr, x)) return 0;
+    if (*x != floor(*x) || *x < lo || *x > hi) {
+        ljgap_verr_add(e, ptr, "must be an integer from %.17g to %.17g (got %.17g)", lo, hi, *x);
+        return 0;
+    }
+    return 1;
+}
+
+/* A JSON array of min..max entries at it; returns its size or 0 after recording why not. */
+static size_t array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+                       const char *what)
+{
+    if (!cJSON_IsArray(it)) {
+        ljgap_verr_add(e, ptr, "must be an array (%s)", what);
+        return 0;
+    }
+    size_t n = (size_t)cJSON_GetArraySize(it);
+    if (n < min || n > max) {
+        ljgap_verr_add(e, ptr, "has %zu entries; give %zu to %zu (%s)", n, min, max, what);
+        return 0;
+    }
+    return n;
+}
+
+/* Index of the string at it (pointer ptr) in names (NULL-terminated), or -1 after recording
+ * why not; what lists the choices for the message, field names the thing chosen. */
+static int pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *const *names,
+                const char *field, const char *what)
+{
+    if (!cJSON_IsString(it)) {
+        ljgap_verr_add(e, ptr, "must be a string: %s", what);
+        return -1;
+    }
+    for (int i = 0; names[i]; i++)
+        if (strcmp(it->valuestring, names[i]) == 0) return i;
+    ljgap_verr_add(e, ptr, "unknown %s \"%.40s\": expected %s", field, it->valuestring, what);
+    return -1;
+}
+
+static const char *k0_why(void)
+{
+    return "below k0 the gap transfer (14) has a pole, the negative-stiffness instability "
+           "of (19); the theory needs k1 > k0";
+}
+
+/* A lower cut-off: positive, finite and above k0. */
+static int check_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double *k1)
+{
+    if (!num_pos(e, it, ptr, k1)) return 0;
+    if (!(*k1 > ljgap_k0())) {
+        ljgap_verr_add(e, ptr, "k1 = %g is at or below k0 = %.5f: %s", *k1, ljgap_k0(), k0_why());
+        return 0;
+    }
+    return 1;
+}
+
+/* D (or 3 - H, when h is the given H) must lie in (2, 3). */
+static int check_D(ljgap_verr *e, const char *ptr, double D, const double *h)
+{
+    char given[80] = "";
+    if (D > 2 && D < 3) return 1;
+    if (h) snprintf(given, sizeof given, "H = %g gives ", *h);
+    ljgap_verr_add(e, ptr,
+                   "%sD = %g, outside (2, 3): the quasi-fractal PSD (6) needs 2 < D < 3 "
+                   "(0 < H < 1)",
+                   given, D);
+    return 0;
+}
+
+/* Uniform range {"min","max","n"} at it (pointer base): 0 < min < max, n integer 2..nmax. */
+static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double nmax, double out[3])
+{
+    char ptr[PTR_LEN];
+    const cJSON *lo, *hi, *n;
+    int ok = 1;
+    only_fields(e, it, base, range_fields, NULL);
+    lo = required(e, it, base, "min", "the first mean gap");
+    hi = required(e, it, base, "max", "the last mean gap");
+    n = required(e, it, base, "n", "number of points");
+    snprintf(ptr, sizeof ptr, "%s/min", base);
+    ok &= lo && num_pos(e, lo, ptr, &out[0]);
+    snprintf(ptr, sizeof ptr, "%s/max", base);
+    if (hi && num_pos(e, hi, ptr, &out[1])) {
+        if (ok && !(out[1] > out[0])) {
+            ljgap_verr_add(e, ptr, "max = %g must be greater than min = %g", out[1], out[0]);
+            ok = 0;
+        }
+    } else {
+        ok = 0;
+    }
+    snprintf(ptr, sizeof ptr, "%s/n", base);
+    ok &= n && num_int(e, n, ptr, 2, nmax, &out[2]);
+    return ok;
+}
+
+/* Level field of a power law: exactly one of C, m0, h_rms. */
+static void parse_level(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+{
+    static const char *const names[] = {"C", "m0", "h_rms"};
+    static const ljgap_level kinds[] = {LJGAP_LEVEL_C, LJGAP_LEVEL_M0, LJGAP_LEVEL_HRMS};
+    int found = 0;
+    for (int i = 0; i < 3; i++) {
+        const cJSON *it = member(psd, names[i]);
+        char ptr[PTR_LEN];
+        if (!it) continue;
+        snprintf(ptr, sizeof ptr, "/psd/%s", names[i]);
+        if (found++) {
+            ljgap_verr_add(e, ptr, "the level is set twice: give only one of C, m0, h_rms");
+            continue;
+        }
+        s->level = kinds[i];
+        num_pos(e, it, ptr, &s->level_val);
+    }
+    if (!found)
+        ljgap_verr_add(e, "/psd",
+                       "no level field: give exactly one of C, m0 (= 2π∫kP dk), "
+                       "h_rms (= √m0)");
+}
+
+static void parse_power(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+{
+    const cJSON *D = member(psd, "D"), *H = member(psd, "H"), *k1, *k2;
+    int k1_ok;
+    only_fields(e, psd, "/psd", power_fields, NULL);
+    if (D && H) {
+        ljgap_verr_add(e, "/psd/H", "give D or H (D = 3 - H), not both");
+    } else if (D) {
+        if (num(e, D, "/psd/D", &s->D)) check_D(e, "/psd/D", s->D, NULL);
+    } else if (H) {
+        double h;
+        if (num(e, H, "/psd/H", &h)) check_D(e, "/psd/H", s->D = 3.0 - h, &h);
+    } else {
+        ljgap_verr_add(e, "/psd/D", "missing required field \"D\" (or H = 3 - D)");
+    }
+    k1 = required(e, psd, "/psd", "k1", "the lowest wavenumber of the PSD");
+    k1_ok = k1 && check_k1(e, k1, "/psd/k1", &s->k1);
+    if (!k1_ok) s->k1 = NAN; /* so later checks against k1 do not pile up */
+    k2 = member(psd, "k2");
+    s->k2 = INFINITY;
+    if (k2 && !cJSON_IsNull(k2)) {
+        if (!num_pos(e, k2, "/psd/k2", &s->k2))
+            s->k2 = NAN;
+        else if (k1_ok && !(s->k2 > s->k1))
+            ljgap_verr_add(e, "/psd/k2", "k2 = %g must be greater than k1 = %g", s->k2, s->k1);
+    }
+    parse_level(e, psd, s);
+}
+
+/* Numbers of a table column (pointer base) into a new array of n entries. */
+static double *table_column(ljgap_verr *e, const cJSON *arr, const char *base, size_t n)
+{
+    double *x = malloc(n * sizeof *x);
+    const cJSON *it;
+    size_t i = 0;
+    char ptr[PTR_LEN];
+    if (!x) {
+        e->oom = 1;
+        return NULL;
+    }
+    cJSON_ArrayForEach(it, arr)
+    {
+        snprintf(ptr, sizeof ptr, "%s/%zu", base, i);
+        if (!num_pos(e, it, ptr, &x[i])) x[i] = NAN;
+        i++;
+    }
+    return x;
+}
+
+static void parse_table(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+{
+    const cJSON *k, *P, *tail;
+    size_t nk = 0, nP = 0;
+    char ptr[PTR_LEN];
+    only_fields(e, psd, "/psd", table_fields, NULL);
+    k = required(e, psd, "/psd", "k", "increasing wavenumbers");
+    P = required(e, psd, "/psd", "P", "the PSD at each k");
+    if (k) nk = array_of(e, k, "/psd/k", 2, PSD_TABLE_MAX, "table wavenumbers");
+    if (P) nP = array_of(e, P, "/psd/P", 2, PSD_TABLE_MAX, "table PSD values");
+    if (nk > 1 && nP > 0 && nP != nk)
+        ljgap_verr_add(e, "/psd/P", "has %zu entries but k has %zu: give one P per k", nP, nk);
+    if (nk > 1 && nP == nk) {
+        s->k = table_column(e, k, "/psd/k", nk);
+        s->P = table_column(e, P, "/psd/P", nk);
+        s->n = nk;
+        for (size_t i = 1; s->k && i < nk; i++) {
+            snprintf(ptr, sizeof ptr, "/psd/k/%zu", i);
+            if (isfinite(s->k[i]) && isfinite(s->k[i - 1]) && !(s->k[i] > s->k[i - 1]))
+                ljgap_verr_add(e, ptr,
+                               "k must be strictly increasing: k[%zu] = %g follows "
+                               "k[%zu] = %g",
+                               i, s->k[i], i - 1, s->k[i - 1]);
+        }
+        if (s->k && isfinite(s->k[0]) && !(s->k[0] > ljgap_k0()))
+            ljgap_verr_add(e, "/psd/k/0",
+                           "the table starts at k = %g, at or below k0 = %.5f: "
+                           "%s",
+                           s->k[0], ljgap_k0(), k0_why());
+    }
+    tail = member(psd, "tail");
+    if (tail && !cJSON_IsObject(tail)) {
+        ljgap_verr_add(e, "/psd/tail", "must be an object {\"exponent\": q}");
+    } else if (tail) {
+        const cJSON *q;
+        only_fields(e, tail, "/psd/tail", tail_fields, NULL);
+        q = required(e, tail, "/psd/tail", "exponent", "P ∝ k^q beyond the last point");
+        s->has_tail = 1;
+        if (q && num(e, q, "/psd/tail/exponent", &s->tail_q) && !(s->tail_q < -2))
+            ljgap_verr_add(e, "/psd/tail/exponent",
+                           "q = %g must be below -2, or the tail "
+                           "carries infinite variance",
+                           s->tail_q);
+    }
+}
+
+static void parse_psd(ljgap_verr *e, const cJSON *root, ljgap_psd_spec *s)
+{
+    static const char *const kinds[] = {"power", "table", NULL};
+    const cJSON *psd = required(e, root, "", "psd", "the surface's power spectral density");
+    const cJSON *kind;
+    if (!psd) return;
+    if (!cJSON_IsObject(psd)) {
+        ljgap_verr_add(e, "/psd", "must be an object {\"kind\": \"power\" | \"table\", ...}");
+        return;
+    }
+    kind = required(e, psd, "/psd", "kind", "\"power\" or \"table\"");
+    if (!kind) return;
+    switch (pick(e, kind, "/psd/kind", kinds, "kind", "\"power\" or \"table\"")) {
+    case 0:
+        s->kind = LJGAP_PSD_POWER;
+        parse_power(e, psd, s);
+        break;
+    case 1:
+        s->kind = LJGAP_PSD_TABLE;
+        parse_table(e, psd, s);
+        break;
+    }
+}
+
+static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
+                         ljgap_request *rq)
+{
+    static const char *const names[] = {"pde", "paper", "montecarlo", NULL};
+    static const ljgap_method methods[] = {LJGAP_METHOD_PDE, LJGAP_METHOD_PAPER, LJGAP_METHOD_MC};
+    const cJSON *m = member(root, "method"), *it;
+    double x;
+    int i = m ? pick(e, m, "/method", names, "method", "\"pde\", \"paper\" or \"montecarlo\"") : -1;
+    if (i >= 0) {
+        rq->opts.method = methods[i];
+        rq->method = names[i];
+    }
+    if ((it = member(root, "tol")) && num(e, it, "/tol", &x)) {
+        if (x > 0 && x <= 0.1)
+            rq->opts.tol = x;
+        else
+            ljgap_verr_add(e, "/tol", "tol = %g is outside (0, 0.1]", x);
+    }
+    if ((it = member(root, "vmax")) && num(e, it, "/vmax", &x)) {
+        if (x > 0 && x <= 1)
+            rq->opts.vmax = x;
+        else
+            ljgap_verr_add(e, "/vmax", "vmax = %g is outside (0, 1]", x);
+        if (rq->opts.method != LJGAP_METHOD_PAPER)
+            ljgap_warn(&rq->warn, "vmax is used by method \"paper\" only and was ignored");
+    }
+    if ((it = member(root, "samples")) &&
+        num_int(e, it, "/samples", 100, (double)lim->max_samples, &x)) {
+        rq->opts.samples = (long)x;
+        if (rq->opts.method != LJGAP_METHOD_MC)
+            ljgap_warn(&rq->warn, "samples is used by method \"montecarlo\" only and was "
+                                  "ignored");
+    }
+    if ((it = member(root, "seed")) && num_int(e, it, "/seed", 0, SEED_MAX, &x)) {
+        rq->opts.seed = (unsigned long)x;
+        if (rq->opts.method != LJGAP_METHOD_MC)
+            ljgap_warn(&rq->warn, "seed is used by method \"montecarlo\" only and was ignored");
+    }
+}
+
+/* A JSON array of 1..lim->max_points entries at it into a new rq->x (values read later);
+ * returns the number of entries, 0 after recording why not. */
+static size_t points(ljgap_verr *e, const cJSON *it, const char *ptr, const ljgap_limits *lim,
+                     const char *what, ljgap_request *rq)
+{
+    size_t n = array_of(e, it, ptr, 1, (size_t)lim->max_points, what);
+    if (!n) return 0;
+    if (!(rq->x = malloc(n * sizeof *rq->x))) {
+        e->oom = 1;
+        return 0;
+    }
+    rq->nx = n;
+    return n;
+}
+
+static void parse_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
+                           ljgap_request *rq)
+{
+    const cJSON *g = required(e, root, "", "g_ave", "{\"min\",\"max\",\"n\"} or an array");
+    double r[3];
+    if (!g) return;
+    if (cJSON_IsObject(g)) {
+        if (!parse_range(e, g, "/g_ave", (double)lim->max_points, r)) return;
+        if (!(rq->x = malloc((size_t)r[2] * sizeof *rq->x))) {
+            e->oom = 1;
+            return;
+        }
+        rq->nx = (size_t)r[2];
+        for (size_t i = 0; i < rq->nx; i++)
+            rq->x[i] = r[0] + (r[1] - r[0]) * (double)i / (double)(rq->nx - 1);
+    } else if (cJSON_IsArray(g)) {
+        const cJSON *it;
+        size_t i = 0;
+        char ptr[PTR_LEN];
+        if (!points(e, g, "/g_ave", lim, "mean gaps", rq)) return;
+        cJSON_ArrayForEach(it, g)
+        {
+            snprintf(ptr, sizeof ptr, "/g_ave/%zu", i);
+            num_pos(e, it, ptr, &rq->x[i++]);
+        }
+    } else {
+        ljgap_verr_add(e, "/g_ave", "must be {\"min\",\"max\",\"n\"} or an array of mean gaps");
+    }
+}
+
+static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq)
+{
+    const cJSON *g = required(e, root, "", "g_ave", "the mean gap");
+    const cJSON *k2 = required(e, root, "", "k2", "snapshot cut-offs, null for ∞");
+    const cJSON *grid = member(root, "grid"), *it;
+    size_t i = 0;
+    char ptr[PTR_LEN];
+    int infinite = 0, k1_known = 0;
+    double k1 = 0;
+    if (g) num_pos(e, g, "/g_ave", &rq->g_ave);
+    if (grid && !cJSON_IsObject(grid))
+        ljgap_verr_add(e, "/grid", "must be an object {\"min\",\"max\",\"n\"}");
+    else if (grid)
+        rq->has_grid = parse_range(e, grid, "/grid", (double)lim->max_points, rq->grid);
+    if (!k2 || !points(e, k2, "/k2", lim, "snapshot cut-offs", rq)) return;
+    /* what the psd allows, when it was readable */
+    if (rq->psd.kind == LJGAP_PSD_POWER && !isnan(rq->psd.k1) && !isnan(rq->psd.k2)) {
+        k1 = rq->psd.k1, k1_known = 1;
+        infinite = isinf(rq->psd.k2);
+    } else if (rq->psd.kind == LJGAP_PSD_TABLE && rq->psd.k && isfinite(rq->psd.k[0])) {
+        k1 = rq->psd.k[0], k1_known = 1;
+        infinite = rq->psd.has_tail;
+    }
+    cJSON_ArrayForEach(it, k2)
+    {
+        snprintf(ptr, sizeof ptr, "/k2/%zu", i);
+        rq->x[i] = INFINITY;
+        if (cJSON_IsNull(it)) {
+            if (k1_known && !infinite)
+                ljgap_verr_add(e, ptr,
+                               "null (∞) needs a PSD with infinite support (power law "
+                               "without k2, or a table with a tail)");
+        } else if (num_pos(e, it, ptr, &rq->x[i]) && k1_known && !(rq->x[i] > k1)) {
+            ljgap_verr_add(e, ptr, "k2 = %g must be greater than the PSD's k1 = %g", rq->x[i], k1);
+        }
+        i++;
+    }
+}
+
+static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
+                        ljgap_request *rq)
+{
+    static const char *const names[] = {"m0", "C", "D", "k1", NULL};
+    static const ljgap_vary varies[] = {LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1};
+    const cJSON *v = required(e, root, "", "vary", "\"m0\", \"C\", \"D\" or \"k1\"");
+    const cJSON *vals = required(e, root, "", "values", "the values of the varied field");
+    const cJSON *it;
+    size_t i = 0;
+    char ptr[PTR_LEN];
+    int k = v ? pick(e, v, "/vary", names, "field to vary", "\"m0\", \"C\", \"D\" or \"k1\"") : -1;
+    int vary_ok = k >= 0;
+    if (rq->psd.kind == LJGAP_PSD_TABLE)
+        ljgap_verr_add(e, "/psd/kind", "a sweep varies a power-law PSD: kind must be \"power\"");
+    if (vary_ok) {
+        rq->vary = varies[k];
+        rq->vary_name = names[k];
+    }
+    if (!vals || !points(e, vals, "/values", lim, "values to sweep", rq)) return;
+    cJSON_ArrayForEach(it, vals)
+    {
+        double *x = &rq->x[i];
+        snprintf(ptr, sizeof ptr, "/values/%zu", i++);
+        if (!vary_ok) {
+            num(e, it, ptr, x);
+        } else if (rq->vary == LJGAP_VARY_D) {
+            if (num(e, it, ptr, x)) check_D(e, ptr, *x, NULL);
+        } else if (rq->vary == LJGAP_VARY_K1) {
+            if (check_k1(e, it, ptr, x) && !isnan(rq->psd.k2) && !(*x < rq->psd.k2))
+                ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x, rq->psd.k2);
+        } else {
+            num_pos(e, it, ptr, x);
+        }
+    }
+}
+
+int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
+                        ljgap_request *rq, ljgap_verr *e)
+{
+    static const char *const *const extra[] = {NULL, traction_fields, pdf_fields, sweep_fields};
+    memset(rq, 0, sizeof *rq);
+    rq->ep = ep;
+    ljgap_opts_default(&rq->opts);
+    rq->method = "pde";
+    rq->psd.k1 = rq->psd.k2 = NAN; /* unknown until read */
+    rq->psd.kind = (ljgap_psd_kind)-1;
+    if (!cJSON_IsObject(root)) {
+        ljgap_verr_add(e, "", "the request body must be a JSON object");
+        return e->n;
+    }
+    only_fields(e, root, "", common_fields, extra[ep]);
+    parse_common(e, root, lim, rq);
+    parse_psd(e, root, &rq->psd);
+    switch (ep) {
+    case LJGAP_EP_ADHESION:
+        break;
+    case LJGAP_EP_TRACTION:
+        parse_traction(e, root, lim, rq);
+        break;
+    case LJGAP_EP_PDF:
+        parse_pdf(e, root, lim, rq);
+        break;
+    case LJGAP_EP_SWEEP:
+        parse_sweep(e, root, lim, rq);
+        break;
+    }
+    return e->n;
+}
+
+void ljgap_request_free(ljgap_request *rq)
+{
+    if (!rq) return;
+    free(rq->psd.k);
+    free(rq->psd.P);
+    free(rq->x);
+    rq->psd.k = rq->psd.P = rq->x = NULL;
+}
+
+int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)
+{
+    if (s->kind == LJGAP_PSD_TABLE)
+        return ljgap_psd_table(psd, s->k, s->P, s->n, s->has_tail, s->tail_q);
+    return ljgap_psd_power(psd, s->D, s->k1, s->k2, s->level, s->level_val);
+}

@@ -1,0 +1,77 @@
+/* request.h -- a compute request (shared/docs/api.md), validated and in core terms.
+ *
+ * ljgap_request_parse reads a cJSON request body for one endpoint, checks every field
+ * against the contract and collects ALL the problems it finds as {"pointer","detail"}
+ * entries (RFC 6901 pointers into the request), so that one 422 answer tells the caller
+ * everything that is wrong. A request that passes has every number the core needs, with
+ * the contract's defaults filled in; the handler then only builds the PSD and calls the
+ * core. Used by handler.c only.
+ */
+#ifndef LJGAP_REQUEST_H
+#define LJGAP_REQUEST_H
+
+#include "handler.h"
+#include "ljgap.h"
+
+#include <cjson/cJSON.h>
+
+/* The endpoints the handler computes. */
+typedef enum { LJGAP_EP_ADHESION, LJGAP_EP_TRACTION, LJGAP_EP_PDF, LJGAP_EP_SWEEP } ljgap_endpoint;
+
+/* Which PSD field a sweep varies. */
+typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1 } ljgap_vary;
+
+/* The psd object as given (not yet built: a sweep builds one PSD per value). */
+typedef struct {
+    ljgap_psd_kind kind;
+    double D;          /* power: fractal dimension (from D or 3 - H) */
+    double k1;         /* power: lower cut-off */
+    double k2;         /* power: upper cut-off, INFINITY when absent or null */
+    ljgap_level level; /* power: which field set the level */
+    double level_val;  /* power: its value */
+    size_t n;          /* table: number of points */
+    double *k, *P;     /* table: owned, n entries each */
+    int has_tail;      /* table: tail given */
+    double tail_q;     /* table: tail exponent */
+} ljgap_psd_spec;
+
+typedef struct {
+    ljgap_endpoint ep;
+    ljgap_opts opts;       /* method, tol, vmax, samples, seed (limits set by the handler) */
+    const char *method;    /* contract name of opts.method (static string) */
+    ljgap_psd_spec psd;    /* the psd object */
+    double *x;             /* owned: traction g_ave points, pdf k2 cut-offs (INFINITY for
+                            * null), or sweep values */
+    size_t nx;             /* entries in x */
+    double g_ave;          /* pdf: the mean gap */
+    int has_grid;          /* pdf: grid given */
+    double grid[3];        /* pdf: {min, max, n} */
+    ljgap_vary vary;       /* sweep: which field */
+    const char *vary_name; /* sweep: its contract name (static string) */
+    ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
+} ljgap_request;
+
+/* Collected validation problems. */
+typedef struct {
+    cJSON *errors; /* array of {"pointer","detail"}, at most LJGAP_MAX_ERRORS kept */
+    int n;         /* problems found (may exceed the number kept) */
+    int oom;       /* an allocation failed while recording */
+} ljgap_verr;
+
+#define LJGAP_MAX_ERRORS 100
+
+/* Validates root (any JSON value) as a request to ep. Returns 0 when it is valid; else the
+ * number of problems, each recorded in e (whose errors array must exist). rq is always left
+ * in a state ljgap_request_free accepts. */
+int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
+                        ljgap_request *rq, ljgap_verr *e);
+void ljgap_request_free(ljgap_request *rq);
+
+/* Builds the PSD a spec describes (ljgap_psd_power / ljgap_psd_table status). */
+int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);
+
+/* Records one problem at pointer ptr (printf-style detail). */
+void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+#endif
