@@ -1,0 +1,965 @@
+/* pde.c -- the continuum limit of the paper's iteration (theory.md §2).
+ *
+ * The update (18) with the packet variance (17) is one Euler step of the Itô process
+ *     dG = f(G,k) √(2π k P(k)) dW_k,   G(k1) = g_ave,
+ * so as the bands shrink the gap PDF Phi(g,k) obeys the Fokker-Planck equation and the mean
+ * traction (21) the backward Kolmogorov equation. With the generator
+ *     (L u)(g) = a(g,k) u''(g),   a = π k P(k) f(g,k)^2   (per unit k),
+ *   forward:   dPhi/dk = (a Phi)'',          Phi(k1) = delta(g - g_ave)   -> gap PDFs;
+ *   backward:  du/dk = -a u'',               u(g, k2) = sigma(g)/sigma0   -> u(g_ave, k1)
+ *              is sigma_bar(g_ave)/sigma0 for every g_ave at once (one solve per curve).
+ *
+ * Discretisation.
+ *  - Gap: a geometric grid g_i = exp(xi0 + i dxi) (relative resolution, right for the
+ *    g^-9 wall and the g^-3 tail), the three-point second difference for non-uniform
+ *    grids (exact on linear functions), and frozen end points. The discrete generator
+ *    annihilates 1 and g, so the forward scheme, built as the exact transpose of the
+ *    backward one, conserves mass and mean (the martingale property) to rounding.
+ *  - Wavenumber: Crank-Nicolson steps uniform in zeta(k) = ln(k - k0) + beta tau(k)/m0,
+ *    where tau is the cumulative variance: ln(k - k0) puts steps where f changes fast
+ *    (stiff starts with k1 near k0, the near-wall switch-on at large k, which a march in
+ *    tau alone misses: theory.md §3) and tau where the variance is. The first two steps
+ *    at k1 are four backward-Euler half steps (Rannacher), which damps the delta start.
+ *  - Infinite k2: march to kmax where f(g_lo,kmax) ≈ 1 on the whole grid, then add the
+ *    remaining variance m0 - tau(kmax) in steps uniform in tau with a = f^2/2 per unit tau
+ *    at k(tau): for D near 3 that tail is not small, and f is not yet 1 near the wall.
+ *  - Resolution levels L = 0,1,2,... halve dxi and every step; level L+1 contains the nodes
+ *    of level L, so Richardson extrapolation (second order, checked by the tests) gives the
+ *    value and |v(L+1) - v(L)|/3 the error estimate. Levels rise until the estimate is
+ *    below tol*max(1,|v|) or the work cap is reached (then a warning says so).
+ *  - Lower grid end: where paths freeze depends on the spectrum (theory.md §3), so it is
+ *    lowered until moving it once more changes the answer by less than the tolerance; that
+ *    change is added to the error estimate.
+ */
+#include "ljgap.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define ZETA_BETA 10.0     /* weight of the variance in the marching variable zeta */
+static double DZETA0 = 0.25; /* zeta step at level 0 */
+static double DXI0 = 0.02;   /* relative grid spacing at level 0 */
+#define MAX_LEVEL 7        /* at most 2^7 times the level-0 resolution */
+#define G_HI_MIN 60.0      /* upper end of the traction grid, at least */
+#define G_LO_FLOOR 0.04    /* never put the lower end below this */
+#define G_LO_FACTOR 0.8    /* each lowering of the lower end */
+#define TAIL_STEPS0 8      /* tau steps of the infinite tail at level 0 (per unit m0 share) */
+
+/* ---- the gap grid ---- */
+typedef struct {
+    size_t n;   /* number of nodes */
+    double *g;  /* nodes */
+    double *A;  /* 9 g^-10 - 3 g^-4, so f = k/(k + A) */
+    double *lo; /* second-difference weights: (D2 u)_i = lo_i u_{i-1} - (lo_i+hi_i) u_i + hi_i u_{i+1} */
+    double *hi;
+    double *wt; /* cell widths (for densities) */
+} pde_grid;
+
+static void grid_free(pde_grid *G)
+{
+    free(G->g);
+    free(G->A);
+    free(G->lo);
+    free(G->hi);
+    free(G->wt);
+    memset(G, 0, sizeof *G);
+}
+
+static int grid_make(pde_grid *G, double xi0, double dxi, size_t n)
+{
+    memset(G, 0, sizeof *G);
+    G->n = n;
+    G->g = malloc(n * sizeof(double));
+    G->A = malloc(n * sizeof(double));
+    G->lo = calloc(n, sizeof(double));
+    G->hi = calloc(n, sizeof(double));
+    G->wt = malloc(n * sizeof(double));
+    if (!G->g || !G->A || !G->lo || !G->hi || !G->wt) {
+        grid_free(G);
+        return LJGAP_ENOMEM;
+    }
+    for (size_t i = 0; i < n; i++) {
+        double g = exp(xi0 + (double)i * dxi);
+        double g2 = g * g, g4 = g2 * g2, g10 = g4 * g4 * g2;
+        G->g[i] = g;
+        G->A[i] = 9.0 / g10 - 3.0 / g4;
+    }
+    for (size_t i = 1; i + 1 < n; i++) {
+        double hm = G->g[i] - G->g[i - 1], hp = G->g[i + 1] - G->g[i];
+        G->lo[i] = 2.0 / (hm * (hm + hp));
+        G->hi[i] = 2.0 / (hp * (hm + hp));
+    }
+    for (size_t i = 0; i < n; i++) {
+        double a = i > 0 ? G->g[i] - G->g[i - 1] : 0, b = i + 1 < n ? G->g[i + 1] - G->g[i] : 0;
+        G->wt[i] = 0.5 * (a + b);
+    }
+    return LJGAP_OK;
+}
+
+/* ---- the march in wavenumber ---- */
+typedef struct {
+    double ka, kb; /* wavenumbers at the two ends (kb may be INFINITY) */
+    double sa, sb; /* coefficient scale: the step's operator is s * f(g,k)^2 * D2 */
+    double theta;  /* 1 backward Euler, 0.5 Crank-Nicolson */
+    int snap;      /* index of the snapshot taken after this step, or -1 */
+} pde_step;
+
+typedef struct {
+    size_t m;       /* number of steps */
+    pde_step *s;    /* steps from k1 upward */
+    double kmax;    /* end of the zeta march */
+    double tau_rem; /* variance added by the tail part */
+} pde_march;
+
+typedef struct {
+    const ljgap_psd *psd;
+    double k0, m0;
+} zeta_ctx;
+
+static double zeta_of(const zeta_ctx *z, double k)
+{
+    return log(k - z->k0) + ZETA_BETA * ljgap_psd_cumvar(z->psd, k) / z->m0;
+}
+
+/* dk/dzeta at k */
+static double dk_dzeta(const zeta_ctx *z, double k)
+{
+    double d = 1.0 / (k - z->k0) + ZETA_BETA * 2.0 * M_PI * k * ljgap_psd_eval(z->psd, k) / z->m0;
+    return 1.0 / d;
+}
+
+/* The k in [ka,kb] with zeta(k) = target: safeguarded Newton in x = ln(k - k0). */
+static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
+{
+    double xa = log(ka - z->k0), xb = log(kb - z->k0);
+    double x = 0.5 * (xa + xb);
+    for (int it = 0; it < 100; it++) {
+        double k = z->k0 + exp(x);
+        double r = zeta_of(z, k) - target;
+        if (r > 0) xb = x;
+        else xa = x;
+        double dzdx = dk_dzeta(z, k) > 0 ? (k - z->k0) / dk_dzeta(z, k) : 1.0;
+        double xn = x - r / dzdx;
+        if (!(xn > xa && xn < xb)) xn = 0.5 * (xa + xb);
+        if (fabs(xn - x) < 1e-14 * (1.0 + fabs(x)) || xb - xa < 1e-14 * (1.0 + fabs(x)))
+            return z->k0 + exp(xn);
+        x = xn;
+    }
+    return z->k0 + exp(x);
+}
+
+static void march_free(pde_march *M)
+{
+    free(M->s);
+    M->s = NULL;
+    M->m = 0;
+}
+
+/* Build the steps of level L from k1 through the sorted cut points cuts[0..nc-1] (the
+ * last one is the end of the march; INFINITY means the whole PSD). A snapshot index is
+ * recorded at each cut. g_lo sets kmax for the infinite tail. */
+static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, size_t nc, int L,
+                      double g_lo)
+{
+    memset(M, 0, sizeof *M);
+    zeta_ctx z = {psd, ljgap_k0(), psd->m0};
+    double kend = cuts[nc - 1];
+    int inf = isinf(kend);
+    double kmax = kend;
+    if (inf) {
+        double kw = 1e3 * 9.0 * pow(g_lo, -10.0);
+        kmax = fmax(100.0 * psd->k1, kw);
+        for (size_t c = 0; c + 1 < nc; c++) kmax = fmax(kmax, 10.0 * cuts[c]);
+        if (isfinite(psd->k2)) kmax = psd->k2, inf = 0;
+    }
+    M->kmax = kmax;
+    M->tau_rem = inf ? psd->m0 - ljgap_psd_cumvar(psd, kmax) : 0.0;
+    double scale = ldexp(1.0, L);
+    double dz = DZETA0 / scale;
+    /* Steps are uniform in zeta from zeta(k1), whatever the cuts: a cut ends a step early
+     * (a remainder under 0.3 dz is merged into the step before). So the nodes do not move
+     * when kmax moves (it follows g_lo), and level L+1 holds every node of level L. */
+    double z1 = zeta_of(&z, psd->k1);
+    size_t cap = 8 + 2 * nc;
+    for (size_t c = 0; c < nc; c++) {
+        double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
+        cap = 8 + 2 * nc + (size_t)ceil((zeta_of(&z, kc) - z1) / dz);
+    }
+    size_t mtail = 0;
+    if (inf && M->tau_rem > 1e-15 * psd->m0) {
+        mtail = (size_t)((2 + ceil(TAIL_STEPS0 * 4.0 * M->tau_rem / psd->m0)) * scale);
+        cap += mtail;
+    }
+    M->s = malloc((cap + 4) * sizeof *M->s);
+    if (!M->s) return LJGAP_ENOMEM;
+    size_t m = 0;
+    double kprev = psd->k1, zprev = z1;
+    long jn = 0; /* regular nodes zeta(k1) + j dz passed so far */
+    int nreg = 0; /* steps made */
+    for (size_t c = 0; c < nc; c++) {
+        double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
+        double zc = zeta_of(&z, kc);
+        while (zprev < zc) {
+            double zn = z1 + (double)(jn + 1) * dz;
+            double kb;
+            if (zn >= zc - 0.3 * dz) zn = zc, kb = kc;
+            else kb = zeta_inv(&z, zn, kprev, kc);
+            while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz) jn++;
+            double h = zn - zprev;
+            if (nreg++ < 2) {
+                /* Rannacher start: each of the first two steps as two backward-Euler halves */
+                double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
+                double sa = 0.5 * h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev);
+                double sm = 0.5 * h * M_PI * km * ljgap_psd_eval(psd, km) * dk_dzeta(&z, km);
+                double sb = 0.5 * h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb);
+                M->s[m++] = (pde_step){kprev, km, sa, sm, 1.0, -1};
+                M->s[m++] = (pde_step){km, kb, sm, sb, 1.0, -1};
+            } else {
+                M->s[m++] = (pde_step){kprev, kb,
+                                       h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev),
+                                       h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb), 0.5, -1};
+            }
+            kprev = kb;
+            zprev = zn;
+            if (zn >= zc) break;
+        }
+        if (m > 0 && !isinf(cuts[c])) M->s[m - 1].snap = (int)c;
+    }
+    if (mtail) {
+        double t0 = ljgap_psd_cumvar(psd, kmax), dt = M->tau_rem / (double)mtail;
+        for (size_t j = 0; j < mtail; j++) {
+            double ka = M->s[m - 1].kb;
+            double kb = j + 1 == mtail ? INFINITY : ljgap_psd_k_of_cumvar(psd, t0 + (double)(j + 1) * dt);
+            M->s[m++] = (pde_step){ka, kb, 0.5 * dt, 0.5 * dt, 0.5, -1};
+        }
+    }
+    /* the final snapshot (the whole PSD, or the last cut) */
+    if (isinf(cuts[nc - 1])) M->s[m - 1].snap = (int)(nc - 1);
+    M->m = m;
+    return LJGAP_OK;
+}
+
+/* ---- time stepping ---- */
+typedef struct {
+    double *fa, *fb;            /* f^2 on the grid at the two ends of the current step */
+    double ka_cur, kb_cur;      /* which step fa, fb belong to (NAN: none) */
+    double *ca, *cb;            /* coefficients s*f^2 at the two ends of a step */
+    double *dl, *dd, *du, *rhs; /* tridiagonal system */
+    double *tmp;
+} pde_work;
+
+static void work_free(pde_work *W)
+{
+    free(W->fa);
+    free(W->fb);
+    free(W->ca);
+    free(W->cb);
+    free(W->dl);
+    free(W->dd);
+    free(W->du);
+    free(W->rhs);
+    free(W->tmp);
+    memset(W, 0, sizeof *W);
+}
+
+static int work_alloc(pde_work *W, size_t n)
+{
+    memset(W, 0, sizeof *W);
+    W->fa = malloc(n * sizeof(double));
+    W->fb = malloc(n * sizeof(double));
+    W->ka_cur = W->kb_cur = NAN;
+    W->ca = malloc(n * sizeof(double));
+    W->cb = malloc(n * sizeof(double));
+    W->dl = malloc(n * sizeof(double));
+    W->dd = malloc(n * sizeof(double));
+    W->du = malloc(n * sizeof(double));
+    W->rhs = malloc(n * sizeof(double));
+    W->tmp = malloc(n * sizeof(double));
+    if (!W->fa || !W->fb || !W->ca || !W->cb || !W->dl || !W->dd || !W->du || !W->rhs || !W->tmp) {
+        work_free(W);
+        return LJGAP_ENOMEM;
+    }
+    return LJGAP_OK;
+}
+
+/* Thomas algorithm, in place: dl sub, dd diag, du super, rhs -> solution. */
+static void tridiag(size_t n, double *dl, double *dd, double *du, double *x)
+{
+    for (size_t i = 1; i < n; i++) {
+        double w = dl[i] / dd[i - 1];
+        dd[i] -= w * du[i - 1];
+        x[i] -= w * x[i - 1];
+    }
+    x[n - 1] /= dd[n - 1];
+    for (size_t i = n - 1; i-- > 0;) x[i] = (x[i] - du[i] * x[i + 1]) / dd[i];
+}
+
+/* u <- S u for one step, S = (I - theta Ba)^-1 (I + (1-theta) Bb), B = s f(g,k)^2 D2.
+ * W->fa/W->fb hold f^2 at the step's two ends; the caller keeps them current. */
+static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, double *u)
+{
+    size_t n = G->n;
+    const double *lo = G->lo, *hi = G->hi, *fa = W->fa, *fb = W->fb;
+    double th = st->theta, cb = (1.0 - th) * st->sb, ca = th * st->sa;
+    double *rhs = W->rhs, *dd = W->dd;
+    /* boundary rows are frozen (lo = hi = 0 there) */
+    rhs[0] = u[0];
+    dd[0] = 1.0;
+    for (size_t i = 1; i + 1 < n; i++) {
+        double d2 = lo[i] * (u[i - 1] - u[i]) + hi[i] * (u[i + 1] - u[i]);
+        rhs[i] = u[i] + cb * fb[i] * d2;
+    }
+    rhs[n - 1] = u[n - 1];
+    /* Solve with dl_i = -c_i lo_i, du_i = -c_i hi_i, dd_i = 1 + c_i (lo_i + hi_i), c_i = ca f_i,
+     * eliminating from both ends towards a meeting row m (a twisted factorisation): the two
+     * division chains are independent, which roughly halves the latency-bound cost of the
+     * Thomas algorithm. Rows 0 and n-1 are frozen (c = 0). */
+    double *inv = W->tmp, *c = W->ca;
+    for (size_t i = 0; i < n; i++) c[i] = ca * fa[i];
+    c[0] = c[n - 1] = 0;
+    size_t m = n / 2;
+    inv[0] = inv[n - 1] = 1.0;
+    for (size_t t = 1; t < m || n - 1 - t > m; t++) {
+        if (t < m) { /* top: row i minus (dl_i/d_{i-1}) row i-1 */
+            size_t i = t;
+            double wi = -c[i] * lo[i] * inv[i - 1];
+            rhs[i] -= wi * rhs[i - 1];
+            inv[i] = 1.0 / (1.0 + c[i] * (lo[i] + hi[i]) + wi * c[i - 1] * hi[i - 1]);
+        }
+        if (n - 1 - t > m) { /* bottom: row j minus (du_j/e_{j+1}) row j+1 */
+            size_t j = n - 1 - t;
+            double wj = -c[j] * hi[j] * inv[j + 1];
+            rhs[j] -= wj * rhs[j + 1];
+            inv[j] = 1.0 / (1.0 + c[j] * (lo[j] + hi[j]) + wj * c[j + 1] * lo[j + 1]);
+        }
+    }
+    /* the meeting row takes both eliminated neighbours */
+    double wl = -c[m] * lo[m] * inv[m - 1], wr = -c[m] * hi[m] * inv[m + 1];
+    double dm = 1.0 + c[m] * (lo[m] + hi[m]) + wl * c[m - 1] * hi[m - 1] + wr * c[m + 1] * lo[m + 1];
+    u[m] = (rhs[m] - wl * rhs[m - 1] - wr * rhs[m + 1]) / dm;
+    /* back substitution outwards along two chains */
+    for (size_t t = 1; t <= m || m + t < n; t++) {
+        if (t <= m) {
+            size_t i = m - t;
+            u[i] = (rhs[i] + c[i] * hi[i] * u[i + 1]) * inv[i];
+        }
+        if (m + t < n) {
+            size_t j = m + t;
+            u[j] = (rhs[j] + c[j] * lo[j] * u[j - 1]) * inv[j];
+        }
+    }
+}
+
+/* p <- S^T p: solve (I - theta Ba)^T y = p, then p = (I + (1-theta) Bb)^T y. */
+static void step_forward(const pde_grid *G, pde_work *W, const pde_step *st, double *p)
+{
+    size_t n = G->n;
+    const double *lo = G->lo, *hi = G->hi;
+    double th = st->theta;
+    for (size_t i = 0; i < n; i++) {
+        W->ca[i] = st->sa * W->fa[i];
+        W->cb[i] = st->sb * W->fb[i];
+    }
+    for (size_t i = 0; i < n; i++) {
+        W->dd[i] = 1.0 + th * W->ca[i] * (lo[i] + hi[i]);
+        W->dl[i] = i > 0 ? -th * W->ca[i - 1] * hi[i - 1] : 0;
+        W->du[i] = i + 1 < n ? -th * W->ca[i + 1] * lo[i + 1] : 0;
+        W->rhs[i] = p[i];
+    }
+    tridiag(n, W->dl, W->dd, W->du, W->rhs);
+    const double *y = W->rhs;
+    double *v = W->tmp;
+    for (size_t i = 0; i < n; i++) v[i] = W->cb[i] * y[i];
+    for (size_t i = 0; i < n; i++) {
+        /* (D2^T v)_i = hi_{i-1} v_{i-1} - (lo_i + hi_i) v_i + lo_{i+1} v_{i+1} */
+        double t = -(lo[i] + hi[i]) * v[i];
+        if (i > 0) t += hi[i - 1] * v[i - 1];
+        if (i + 1 < n) t += lo[i + 1] * v[i + 1];
+        p[i] = y[i] + (1.0 - th) * t;
+    }
+}
+
+/* f(g_i,k)^2 on the grid (1 at k = infinity). */
+static void fsq(const pde_grid *G, double k, double *f2)
+{
+    if (isinf(k)) {
+        for (size_t i = 0; i < G->n; i++) f2[i] = 1.0;
+        return;
+    }
+    for (size_t i = 0; i < G->n; i++) {
+        double f = k / (k + G->A[i]);
+        f2[i] = f * f;
+    }
+}
+
+/* Make W->fa/W->fb hold f^2 at the ends of step st, reusing the other array when the
+ * march moves by one node (forward: new fa = old fb; backward: new fb = old fa). */
+static void fsq_step(const pde_grid *G, pde_work *W, const pde_step *st, int forward)
+{
+    double *t;
+    if (forward) {
+        if (W->kb_cur == st->ka) {
+            t = W->fa, W->fa = W->fb, W->fb = t;
+        } else {
+            fsq(G, st->ka, W->fa);
+        }
+        fsq(G, st->kb, W->fb);
+    } else {
+        if (W->ka_cur == st->kb) {
+            t = W->fb, W->fb = W->fa, W->fa = t;
+        } else {
+            fsq(G, st->kb, W->fb);
+        }
+        fsq(G, st->ka, W->fa);
+    }
+    W->ka_cur = st->ka;
+    W->kb_cur = st->kb;
+}
+
+/* ---- domain ---- */
+
+/* Upper bound S^2 of the gap variance: ∫ 2π k P f_max(k)^2 dk with f_max = k/(k - k0). */
+static double variance_bound(const ljgap_psd *psd)
+{
+    const double k0 = ljgap_k0();
+    double k2 = isinf(psd->k2) ? 1e12 * psd->k1 : psd->k2;
+    /* trapezoid in ln(k - k0) on 400 panels, plus the tail as f = 1 */
+    double xa = log(psd->k1 - k0), xb = log(k2 - k0), sum = 0;
+    int np = 400;
+    for (int i = 0; i <= np; i++) {
+        double k = k0 + exp(xa + (xb - xa) * i / np);
+        double f = k / (k - k0);
+        double v = 2.0 * M_PI * k * ljgap_psd_eval(psd, k) * f * f * (k - k0);
+        sum += (i == 0 || i == np ? 0.5 : 1.0) * v;
+    }
+    sum *= (xb - xa) / np;
+    sum += psd->m0 - ljgap_psd_cumvar(psd, k2);
+    return fmax(sum, psd->m0);
+}
+
+/* ---- one solve at one level ---- */
+typedef struct {
+    const ljgap_psd *psd;
+    const ljgap_opts *o;
+    double deadline;
+    long work; /* grid points x steps spent */
+} pde_ctx;
+
+/* Backward solve: u on the grid of level L between ln g_lo and ln g_hi. */
+static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G, double **uout)
+{
+    double dxi = DXI0 / ldexp(1.0, L);
+    size_t n0 = (size_t)ceil(log(g_hi / g_lo) / DXI0);
+    size_t n = n0 * ((size_t)1 << L) + 1;
+    double cut = INFINITY;
+    if (isfinite(C->psd->k2)) cut = C->psd->k2;
+    pde_march M;
+    pde_work W = {0};
+    double *u = NULL;
+    /* anchored at g_hi, so that a lower g_lo only adds nodes below */
+    int st = grid_make(G, log(g_hi) - (double)n0 * DXI0, dxi, n);
+    if (st) return st;
+    st = march_make(&M, C->psd, &cut, 1, L, g_lo);
+    if (st) goto fail;
+    if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
+        st = LJGAP_ECAP;
+        goto fail_m;
+    }
+    st = work_alloc(&W, n);
+    if (st) goto fail_m;
+    u = malloc(n * sizeof *u);
+    if (!u) {
+        st = LJGAP_ENOMEM;
+        goto fail_m;
+    }
+    for (size_t i = 0; i < n; i++) u[i] = ljgap_sigma(G->g[i]);
+    for (size_t j = M.m; j-- > 0;) {
+        fsq_step(G, &W, &M.s[j], 0);
+        step_backward(G, &W, &M.s[j], u);
+        if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
+            st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
+            goto fail_m;
+        }
+    }
+    C->work += (long)(n * M.m);
+    if (getenv("LJGAP_DEBUG"))
+        fprintf(stderr, "curve L=%d g_lo=%.4g g_hi=%.4g n=%zu m=%zu kmax=%.3g tau_rem=%.3g\n", L, g_lo,
+                g_hi, n, M.m, M.kmax, M.tau_rem);
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(u[i])) {
+            st = LJGAP_EFAIL;
+            goto fail_m;
+        }
+    work_free(&W);
+    march_free(&M);
+    *uout = u;
+    return LJGAP_OK;
+fail_m:
+    march_free(&M);
+fail:
+    work_free(&W);
+    free(u);
+    grid_free(G);
+    return st;
+}
+
+/* Everything a traction solve reports, at one level and one lower end. */
+typedef struct {
+    size_t n;
+    double *sig;  /* sigma at the requested points */
+    ljgap_summary sum;
+    int sum_ok;
+} curve_result;
+
+static void curve_result_free(curve_result *r)
+{
+    free(r->sig);
+    r->sig = NULL;
+}
+
+static int curve_at(pde_ctx *C, double g_lo, double g_hi, int L, const double *g_ave, size_t n,
+                    curve_result *R, ljgap_warnings *w)
+{
+    pde_grid G;
+    double *u = NULL;
+    memset(R, 0, sizeof *R);
+    int st = solve_curve(C, g_lo, g_hi, L, &G, &u);
+    if (st) return st;
+    R->n = n;
+    R->sig = malloc((n ? n : 1) * sizeof(double));
+    if (!R->sig) {
+        st = LJGAP_ENOMEM;
+        goto end;
+    }
+    /* values at requested points: cubic through the four nearest nodes (Lagrange) */
+    double xi0 = log(G.g[0]), dxi = log(G.g[1]) - xi0;
+    for (size_t j = 0; j < n; j++) {
+        double x = (log(g_ave[j]) - xi0) / dxi;
+        long i = (long)floor(x) - 1;
+        if (i < 0) i = 0;
+        if (i > (long)G.n - 4) i = (long)G.n - 4;
+        double v = 0;
+        for (int a = 0; a < 4; a++) {
+            double l = 1;
+            for (int b = 0; b < 4; b++)
+                if (b != a) l *= (g_ave[j] - G.g[i + b]) / (G.g[i + a] - G.g[i + b]);
+            v += l * u[i + a];
+        }
+        R->sig[j] = v;
+    }
+    R->sum_ok = ljgap_curve_summary(G.g, u, G.n, C->psd->m0, &R->sum, w) == LJGAP_OK;
+end:
+    free(u);
+    grid_free(&G);
+    if (st) curve_result_free(R);
+    return st;
+}
+
+/* Largest relative difference between two results over everything reported. */
+static double curve_diff(const curve_result *a, const curve_result *b, int with_sum)
+{
+    double d = 0;
+    for (size_t j = 0; j < a->n; j++)
+        d = fmax(d, fabs(a->sig[j] - b->sig[j]) / fmax(1.0, fabs(b->sig[j])));
+    if (with_sum && a->sum_ok && b->sum_ok) {
+        const ljgap_est *x = &a->sum.g_eq, *y = &b->sum.g_eq;
+        for (int q = 0; q < 4; q++) d = fmax(d, fabs(x[q].value - y[q].value) / fmax(1.0, fabs(y[q].value)));
+    }
+    return d;
+}
+
+int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
+{
+    if (getenv("LJGAP_DZ")) DZETA0 = atof(getenv("LJGAP_DZ"));
+    if (getenv("LJGAP_DX")) DXI0 = atof(getenv("LJGAP_DX"));
+    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    double gmin = 1.0, gmax = 1.0;
+    for (size_t j = 0; j < n; j++) gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
+    double S = sqrt(variance_bound(psd));
+    double g_hi = fmax(G_HI_MIN, fmax(3.0 * gmax, gmax + 30.0 * S));
+    g_hi = fmax(g_hi, 12.0 * sqrt(psd->m0)); /* the analytic tail needs m0/g_hi^2 <= 0.01 */
+    double g_lo = fmax(0.6 * gmin, G_LO_FLOOR / G_LO_FACTOR);
+    int want_sum = sum != NULL;
+    curve_result A = {0}, B = {0}, P = {0};
+    int st;
+    double trunc = 0; /* error from the lower end */
+
+    /* lower the lower end until the level-0 answer stops changing */
+    st = curve_at(&C, g_lo, g_hi, 0, g_ave, n, &A, w);
+    if (st) return st;
+    for (;;) {
+        double g2 = g_lo * G_LO_FACTOR;
+        st = curve_at(&C, g2, g_hi, 0, g_ave, n, &B, w);
+        if (st) goto end;
+        double d = curve_diff(&A, &B, want_sum);
+        curve_result_free(&A);
+        A = B;
+        B = (curve_result){0};
+        g_lo = g2;
+        trunc = d;
+        if (d < 0.1 * o->tol) break;
+        if (g_lo * G_LO_FACTOR < G_LO_FLOOR) {
+            ljgap_warn(w, "moving the lower grid end to g = %g still changes the answer by %.2g "
+                          "(relative): paths reach the wall region; the error includes this",
+                       g_lo, d);
+            break;
+        }
+    }
+    /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 (second order, so
+     * R_L is fourth-order accurate); the error estimate of R_L is |R_L - R_{L-1}| (the error
+     * of the less accurate R_{L-1}: conservative), plus the lower-end change. */
+    double est = INFINITY;
+    int L = 0, nR = 0;
+    for (;;) {
+        st = curve_at(&C, g_lo, g_hi, L + 1, g_ave, n, &B, w);
+        if (st == LJGAP_ECAP && L > 0) {
+            ljgap_warn(w, "work cap reached at resolution level %d: the error estimate is above "
+                          "the requested tolerance",
+                       L);
+            st = LJGAP_OK;
+            break;
+        }
+        if (st) goto end;
+        if (want_sum && !B.sum_ok) {
+            st = LJGAP_EFAIL;
+            goto end;
+        }
+        /* B <- Richardson(B, A); P keeps the previous Richardson value */
+        for (size_t j = 0; j < n; j++) {
+            double d = B.sig[j] - A.sig[j];
+            A.sig[j] = B.sig[j];
+            B.sig[j] += d / 3.0;
+        }
+        ljgap_est *x = &B.sum.g_eq, *y = &A.sum.g_eq;
+        for (int q = 0; q < 4; q++) {
+            double d = x[q].value - y[q].value;
+            y[q].value = x[q].value;
+            x[q].value += d / 3.0;
+            x[q].err = fabs(d) / 3.0; /* two-level estimate, used if no third level */
+        }
+        for (size_t j = 0; j < n; j++) sigma[j].err = fabs(A.sig[j] - B.sig[j]);
+        /* now A = plain level L+1, B = Richardson at L+1 */
+        if (nR > 0) {
+            est = curve_diff(&B, &P, want_sum) + trunc;
+            for (size_t j = 0; j < n; j++) sigma[j].err = fabs(B.sig[j] - P.sig[j]);
+            ljgap_est *p = &P.sum.g_eq;
+            for (int q = 0; q < 4; q++) x[q].err = fabs(x[q].value - p[q].value);
+        } else {
+            est = curve_diff(&B, &A, want_sum) + trunc;
+        }
+        if (getenv("LJGAP_DEBUG"))
+            fprintf(stderr, "  L=%d geq=%.10f smax=%.10f gm=%.10f dg=%.10f est=%.3g\n", L + 1,
+                    B.sum.g_eq.value, B.sum.sigma_max.value, B.sum.g_at_max.value,
+                    B.sum.dgamma_eff.value, est);
+        curve_result_free(&P);
+        P = B;
+        B = (curve_result){0};
+        nR++;
+        L++;
+        if (nR >= 2 && est <= o->tol) break;
+        if (L >= MAX_LEVEL) {
+            ljgap_warn(w, "finest resolution level reached: the error estimate is above the "
+                          "requested tolerance");
+            break;
+        }
+    }
+    /* P holds the last Richardson values with their error estimates */
+    for (size_t j = 0; j < n; j++) {
+        sigma[j].value = P.sig[j];
+        sigma[j].err += trunc * fmax(1.0, fabs(P.sig[j]));
+    }
+    if (want_sum) {
+        *sum = P.sum;
+        ljgap_est *x = &sum->g_eq;
+        for (int q = 0; q < 4; q++) x[q].err += trunc * fmax(1.0, fabs(x[q].value));
+    }
+    st = LJGAP_OK;
+end:
+    curve_result_free(&A);
+    curve_result_free(&B);
+    curve_result_free(&P);
+    return st;
+}
+
+/* ---- gap PDFs ---- */
+
+/* Forward solve at level L on a grid that has g_ave as a node; snapshots of the discrete
+ * masses at each cut. */
+static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const double *cuts,
+                     size_t nc, int L, pde_grid *G, double **snaps)
+{
+    double dxi = DXI0 / ldexp(1.0, L);
+    double lx = log(g_ave);
+    size_t below = (size_t)ceil((lx - log(g_lo)) / DXI0);
+    size_t above = (size_t)ceil((log(g_hi) - lx) / DXI0);
+    if (below < 4) below = 4;
+    if (above < 4) above = 4;
+    size_t scale = (size_t)1 << L;
+    size_t n = (below + above) * scale + 1, i0 = below * scale;
+    pde_march M;
+    pde_work W = {0};
+    double *p = NULL;
+    int st = grid_make(G, lx - (double)i0 * dxi, dxi, n);
+    if (st) return st;
+    st = march_make(&M, C->psd, cuts, nc, L, g_lo);
+    if (st) goto fail;
+    if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
+        st = LJGAP_ECAP;
+        goto fail_m;
+    }
+    st = work_alloc(&W, n);
+    if (st) goto fail_m;
+    p = calloc(n, sizeof *p);
+    if (!p) {
+        st = LJGAP_ENOMEM;
+        goto fail_m;
+    }
+    for (size_t c = 0; c < nc; c++) snaps[c] = NULL;
+    p[i0] = 1.0;
+    for (size_t j = 0; j < M.m; j++) {
+        fsq_step(G, &W, &M.s[j], 1);
+        step_forward(G, &W, &M.s[j], p);
+        if (M.s[j].snap >= 0) {
+            double *s = malloc(n * sizeof *s);
+            if (!s) {
+                st = LJGAP_ENOMEM;
+                goto fail_m;
+            }
+            memcpy(s, p, n * sizeof *s);
+            snaps[M.s[j].snap] = s;
+        }
+        if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
+            st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
+            goto fail_m;
+        }
+    }
+    C->work += (long)(n * M.m);
+    for (size_t c = 0; c < nc; c++)
+        if (!snaps[c]) {
+            st = LJGAP_EFAIL;
+            goto fail_m;
+        }
+    free(p);
+    work_free(&W);
+    march_free(&M);
+    return LJGAP_OK;
+fail_m:
+    march_free(&M);
+    for (size_t c = 0; c < nc; c++) free(snaps[c]), snaps[c] = NULL;
+fail:
+    free(p);
+    work_free(&W);
+    grid_free(G);
+    return st;
+}
+
+typedef struct {
+    pde_grid G;
+    double **p; /* nc snapshots of masses */
+} pdf_level;
+
+static void pdf_level_free(pdf_level *P, size_t nc)
+{
+    if (P->p)
+        for (size_t c = 0; c < nc; c++) free(P->p[c]);
+    free(P->p);
+    grid_free(&P->G);
+    P->p = NULL;
+}
+
+static int pdf_level_run(pde_ctx *C, double g_ave, double g_lo, double g_hi, const double *cuts,
+                         size_t nc, int L, pdf_level *P)
+{
+    P->p = calloc(nc, sizeof *P->p);
+    if (!P->p) return LJGAP_ENOMEM;
+    int st = solve_pdf(C, g_ave, g_lo, g_hi, cuts, nc, L, &P->G, P->p);
+    if (st) {
+        free(P->p);
+        P->p = NULL;
+    }
+    return st;
+}
+
+/* sigma of a snapshot: Σ p_i sigma(g_i) */
+static double snap_sigma(const pde_grid *G, const double *p)
+{
+    double s = 0;
+    for (size_t i = 0; i < G->n; i++) s += p[i] * ljgap_sigma(G->g[i]);
+    return s;
+}
+
+/* L1 distance between the densities of a coarse level (c) and the next finer one (f),
+ * whose node 2i is the coarse node i. */
+static double pdf_l1(const pdf_level *c, const pdf_level *f, size_t snap)
+{
+    double d = 0;
+    for (size_t i = 0; i < c->G.n; i++) {
+        double pc = c->p[snap][i] / c->G.wt[i];
+        double pf = f->p[snap][2 * i] / f->G.wt[2 * i];
+        d += fabs(pc - pf) * c->G.wt[i];
+    }
+    return d;
+}
+
+int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
+                  size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
+{
+    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    /* march through the cuts in increasing order; out[] keeps the request's order */
+    size_t *ord = malloc((nk2 ? nk2 : 1) * sizeof *ord);
+    double *cuts = malloc((nk2 ? nk2 : 1) * sizeof *cuts);
+    pdf_level A = {0}, B = {0};
+    int st = LJGAP_ENOMEM;
+    if (!ord || !cuts) goto end;
+    for (size_t i = 0; i < nk2; i++) ord[i] = i;
+    for (size_t i = 1; i < nk2; i++)
+        for (size_t j = i; j > 0 && k2[ord[j]] < k2[ord[j - 1]]; j--) {
+            size_t t = ord[j];
+            ord[j] = ord[j - 1];
+            ord[j - 1] = t;
+        }
+    for (size_t i = 0; i < nk2; i++) cuts[i] = fmin(k2[ord[i]], psd->k2);
+    double S = sqrt(variance_bound(psd));
+    double g_hi = g_ave + 10.0 * S;
+    double g_lo = fmax(fmin(0.6, 0.6 * g_ave), g_ave - 10.0 * S);
+    g_lo = fmax(g_lo, G_LO_FLOOR);
+    /* lower end: lower while the snapshot tractions change at level 0 */
+    st = pdf_level_run(&C, g_ave, g_lo, g_hi, cuts, nk2, 0, &A);
+    if (st) goto end;
+    double trunc = 0;
+    while (g_lo > G_LO_FLOOR && g_lo > g_ave - 10.0 * S) {
+        double g2 = fmax(g_lo * G_LO_FACTOR, G_LO_FLOOR);
+        st = pdf_level_run(&C, g_ave, g2, g_hi, cuts, nk2, 0, &B);
+        if (st) goto end;
+        double d = 0;
+        for (size_t c = 0; c < nk2; c++) {
+            double a = snap_sigma(&A.G, A.p[c]), b = snap_sigma(&B.G, B.p[c]);
+            d = fmax(d, fabs(a - b) / fmax(1.0, fabs(b)));
+        }
+        pdf_level_free(&A, nk2);
+        A = B;
+        B = (pdf_level){0};
+        g_lo = g2;
+        trunc = d;
+        if (d < 0.1 * o->tol) break;
+        if (g_lo <= G_LO_FLOOR) {
+            ljgap_warn(w, "probability reaches the lower grid end g = %g", g_lo);
+            break;
+        }
+    }
+    /* refine until sigma and the density are within tolerance */
+    int L = 0;
+    double est_s = INFINITY, est_l1 = INFINITY;
+    double *sig_prev = calloc(nk2, sizeof *sig_prev), *sig_cur = calloc(nk2, sizeof *sig_cur);
+    double *l1 = calloc(nk2, sizeof *l1);
+    if (!sig_prev || !sig_cur || !l1) {
+        st = LJGAP_ENOMEM;
+        free(sig_prev), free(sig_cur), free(l1);
+        goto end;
+    }
+    for (;;) {
+        st = pdf_level_run(&C, g_ave, g_lo, g_hi, cuts, nk2, L + 1, &B);
+        if (st == LJGAP_ECAP && L > 0) {
+            ljgap_warn(w, "work cap reached at resolution level %d: the error estimate is above "
+                          "the requested tolerance",
+                       L);
+            st = LJGAP_OK;
+            break;
+        }
+        if (st) break;
+        est_s = est_l1 = 0;
+        for (size_t c = 0; c < nk2; c++) {
+            sig_prev[c] = snap_sigma(&A.G, A.p[c]);
+            sig_cur[c] = snap_sigma(&B.G, B.p[c]);
+            l1[c] = pdf_l1(&A, &B, c) / 3.0;
+            est_s = fmax(est_s, fabs(sig_cur[c] - sig_prev[c]) / 3.0 / fmax(1.0, fabs(sig_cur[c])));
+            est_l1 = fmax(est_l1, l1[c]);
+        }
+        pdf_level_free(&A, nk2);
+        A = B;
+        B = (pdf_level){0};
+        L++;
+        if (fmax(est_s, est_l1) <= o->tol) break;
+        if (L >= MAX_LEVEL - 1) {
+            ljgap_warn(w, "finest resolution level reached: the error estimate is above the "
+                          "requested tolerance");
+            break;
+        }
+    }
+    if (st == LJGAP_OK) {
+        /* A is the finest level; output its density */
+        for (size_t c = 0; c < nk2 && st == LJGAP_OK; c++) {
+            ljgap_pdf *P = &out[ord[c]];
+            const double *p = A.p[c];
+            const pde_grid *G = &A.G;
+            P->k2 = k2[ord[c]];
+            double mass = 0, mean = 0;
+            for (size_t i = 0; i < G->n; i++) mass += p[i], mean += p[i] * G->g[i];
+            P->mass = mass;
+            P->mean = mean;
+            double d = sig_cur[c] - sig_prev[c];
+            P->sigma.value = sig_cur[c] + d / 3.0;
+            P->sigma.err = fabs(d) / 3.0 + trunc * fmax(1.0, fabs(sig_cur[c]));
+            P->phi_err = l1[c];
+            if (grid) {
+                size_t m = (size_t)grid[2];
+                P->n = m;
+                P->g = malloc(m * sizeof(double));
+                P->phi = malloc(m * sizeof(double));
+                if (!P->g || !P->phi) {
+                    st = LJGAP_ENOMEM;
+                    break;
+                }
+                size_t i = 0;
+                for (size_t q = 0; q < m; q++) {
+                    double x = grid[0] + (grid[1] - grid[0]) * (double)q / (double)(m - 1);
+                    P->g[q] = x;
+                    if (x < G->g[0] || x > G->g[G->n - 1]) {
+                        P->phi[q] = 0;
+                        continue;
+                    }
+                    while (i + 2 < G->n && G->g[i + 1] < x) i++;
+                    double t = (x - G->g[i]) / (G->g[i + 1] - G->g[i]);
+                    P->phi[q] = (1 - t) * p[i] / G->wt[i] + t * p[i + 1] / G->wt[i + 1];
+                }
+            } else {
+                /* the nodes where the density is not negligible */
+                double pmax = 0;
+                for (size_t i = 0; i < G->n; i++) pmax = fmax(pmax, p[i] / G->wt[i]);
+                size_t a = 0, b = G->n - 1;
+                while (a < b && p[a] / G->wt[a] < 1e-12 * pmax) a++;
+                while (b > a && p[b] / G->wt[b] < 1e-12 * pmax) b--;
+                a = a > 0 ? a - 1 : a;
+                b = b + 1 < G->n ? b + 1 : b;
+                /* at most ~2000 points: thin out uniformly */
+                size_t stride = 1;
+                while ((b - a) / stride > 2000) stride++;
+                size_t m = (b - a) / stride + 1;
+                P->n = m;
+                P->g = malloc(m * sizeof(double));
+                P->phi = malloc(m * sizeof(double));
+                if (!P->g || !P->phi) {
+                    st = LJGAP_ENOMEM;
+                    break;
+                }
+                for (size_t q = 0; q < m; q++) {
+                    size_t i = a + q * stride;
+                    P->g[q] = G->g[i];
+                    P->phi[q] = p[i] / G->wt[i];
+                }
+            }
+        }
+    }
+    free(sig_prev);
+    free(sig_cur);
+    free(l1);
+end:
+    pdf_level_free(&A, nk2);
+    pdf_level_free(&B, nk2);
+    free(ord);
+    free(cuts);
+    return st;
+}
