@@ -20,7 +20,7 @@
 typedef struct {
     gsl_spline *sp;
     gsl_interp_accel *acc;
-    int deriv;           /* 0: the curve, 1: its derivative, 2: derivative of the local poly */
+    int deriv;             /* 0: the curve, 1: its derivative, 2: derivative of the local poly */
     const double *px, *py; /* local polynomial: POLY_N nodes */
 } spline_fn;
 
@@ -90,7 +90,8 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
     }
     /* the sign change left of it */
     size_t j = im;
-    while (j > 0 && u[j - 1] > 0) j--;
+    while (j > 0 && u[j - 1] > 0)
+        j--;
     if (j == 0) {
         ljgap_warn(w, "the traction curve does not become compressive above g = %g", g[0]);
         return LJGAP_EFAIL;
@@ -129,8 +130,9 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
     double area = gsl_spline_eval_integ(S.sp, geq, G, S.acc);
     double tail = ljgap_sigma_work_smoothed(G, m0_tail);
     if (!isfinite(tail)) {
-        ljgap_warn(w, "the curve ends at g = %g, too close for the analytic tail with m0 = %g; "
-                      "the tail uses the g^-3 law",
+        ljgap_warn(w,
+                   "the curve ends at g = %g, too close for the analytic tail with m0 = %g; "
+                   "the tail uses the g^-3 law",
                    G, m0_tail);
         tail = 0.5 * u[n - 1] * G;
     }

@@ -1,7 +1,7 @@
 /* lj.c -- the Lennard-Jones interface law and the gap transfer function.
  *
  * Dimensionless (theory.md §1): g = gap/epsilon, k = chi*wavenumber,
- * chi = 3 epsilon^2 E*/(16 dgamma).
+ * chi = 3 epsilon^2 Estar/(16 dgamma).
  *
  *   sigma/sigma0 = (3√3/2)(g^-3 - g^-9)                       (8),(9), tensile positive,
  *                  maximum 1 at g = 3^(1/6);

@@ -32,27 +32,28 @@
  *    change is added to the error estimate.
  */
 #include "ljgap.h"
+#include "pde.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define ZETA_BETA 10.0     /* weight of the variance in the marching variable zeta */
-static double DZETA0 = 0.25; /* zeta step at level 0 */
-static double DXI0 = 0.02;   /* relative grid spacing at level 0 */
-#define MAX_LEVEL 7        /* at most 2^7 times the level-0 resolution */
-#define G_HI_MIN 60.0      /* upper end of the traction grid, at least */
-#define G_LO_FLOOR 0.04    /* never put the lower end below this */
-#define G_LO_FACTOR 0.8    /* each lowering of the lower end */
-#define TAIL_STEPS0 8      /* tau steps of the infinite tail at level 0 (per unit m0 share) */
+#define ZETA_BETA 10.0  /* weight of the variance in the marching variable zeta */
+#define DZETA0 0.25     /* zeta step at level 0 */
+#define DXI0 0.02       /* relative grid spacing at level 0 */
+#define MAX_LEVEL 7     /* at most 2^7 times the level-0 resolution */
+#define G_HI_MIN 60.0   /* upper end of the traction grid, at least */
+#define G_LO_FLOOR 0.04 /* never put the lower end below this */
+#define G_LO_FACTOR 0.8 /* each lowering of the lower end */
+#define TAIL_STEPS0 8   /* tau steps of the infinite tail at level 0 (per unit m0 share) */
 
 /* ---- the gap grid ---- */
 typedef struct {
     size_t n;   /* number of nodes */
     double *g;  /* nodes */
     double *A;  /* 9 g^-10 - 3 g^-4, so f = k/(k + A) */
-    double *lo; /* second-difference weights: (D2 u)_i = lo_i u_{i-1} - (lo_i+hi_i) u_i + hi_i u_{i+1} */
+    double *lo; /* second-difference weights: (D2 u)_i = lo_i u_{i-1} - (lo_i+hi_i) u_i + hi_i
+                   u_{i+1} */
     double *hi;
     double *wt; /* cell widths (for densities) */
 } pde_grid;
@@ -138,8 +139,10 @@ static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
     for (int it = 0; it < 100; it++) {
         double k = z->k0 + exp(x);
         double r = zeta_of(z, k) - target;
-        if (r > 0) xb = x;
-        else xa = x;
+        if (r > 0)
+            xb = x;
+        else
+            xa = x;
         double dzdx = dk_dzeta(z, k) > 0 ? (k - z->k0) / dk_dzeta(z, k) : 1.0;
         double xn = x - r / dzdx;
         if (!(xn > xa && xn < xb)) xn = 0.5 * (xa + xb);
@@ -171,7 +174,8 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     if (inf) {
         double kw = 1e3 * 9.0 * pow(g_lo, -10.0);
         kmax = fmax(100.0 * psd->k1, kw);
-        for (size_t c = 0; c + 1 < nc; c++) kmax = fmax(kmax, 10.0 * cuts[c]);
+        for (size_t c = 0; c + 1 < nc; c++)
+            kmax = fmax(kmax, 10.0 * cuts[c]);
         if (isfinite(psd->k2)) kmax = psd->k2, inf = 0;
     }
     M->kmax = kmax;
@@ -196,7 +200,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     if (!M->s) return LJGAP_ENOMEM;
     size_t m = 0;
     double kprev = psd->k1, zprev = z1;
-    long jn = 0; /* regular nodes zeta(k1) + j dz passed so far */
+    long jn = 0;  /* regular nodes zeta(k1) + j dz passed so far */
     int nreg = 0; /* steps made */
     for (size_t c = 0; c < nc; c++) {
         double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
@@ -204,22 +208,30 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
         while (zprev < zc) {
             double zn = z1 + (double)(jn + 1) * dz;
             double kb;
-            if (zn >= zc - 0.3 * dz) zn = zc, kb = kc;
-            else kb = zeta_inv(&z, zn, kprev, kc);
-            while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz) jn++;
+            if (zn >= zc - 0.3 * dz)
+                zn = zc, kb = kc;
+            else
+                kb = zeta_inv(&z, zn, kprev, kc);
+            while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz)
+                jn++;
             double h = zn - zprev;
             if (nreg++ < 2) {
                 /* Rannacher start: each of the first two steps as two backward-Euler halves */
                 double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
-                double sa = 0.5 * h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev);
+                double sa =
+                    0.5 * h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev);
                 double sm = 0.5 * h * M_PI * km * ljgap_psd_eval(psd, km) * dk_dzeta(&z, km);
                 double sb = 0.5 * h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb);
                 M->s[m++] = (pde_step){kprev, km, sa, sm, 1.0, -1};
                 M->s[m++] = (pde_step){km, kb, sm, sb, 1.0, -1};
             } else {
-                M->s[m++] = (pde_step){kprev, kb,
-                                       h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev),
-                                       h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb), 0.5, -1};
+                M->s[m++] =
+                    (pde_step){kprev,
+                               kb,
+                               h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev),
+                               h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb),
+                               0.5,
+                               -1};
             }
             kprev = kb;
             zprev = zn;
@@ -231,7 +243,8 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
         double t0 = ljgap_psd_cumvar(psd, kmax), dt = M->tau_rem / (double)mtail;
         for (size_t j = 0; j < mtail; j++) {
             double ka = M->s[m - 1].kb;
-            double kb = j + 1 == mtail ? INFINITY : ljgap_psd_k_of_cumvar(psd, t0 + (double)(j + 1) * dt);
+            double kb =
+                j + 1 == mtail ? INFINITY : ljgap_psd_k_of_cumvar(psd, t0 + (double)(j + 1) * dt);
             M->s[m++] = (pde_step){ka, kb, 0.5 * dt, 0.5 * dt, 0.5, -1};
         }
     }
@@ -293,7 +306,8 @@ static void tridiag(size_t n, double *dl, double *dd, double *du, double *x)
         x[i] -= w * x[i - 1];
     }
     x[n - 1] /= dd[n - 1];
-    for (size_t i = n - 1; i-- > 0;) x[i] = (x[i] - du[i] * x[i + 1]) / dd[i];
+    for (size_t i = n - 1; i-- > 0;)
+        x[i] = (x[i] - du[i] * x[i + 1]) / dd[i];
 }
 
 /* u <- S u for one step, S = (I - theta Ba)^-1 (I + (1-theta) Bb), B = s f(g,k)^2 D2.
@@ -317,7 +331,8 @@ static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, do
      * division chains are independent, which roughly halves the latency-bound cost of the
      * Thomas algorithm. Rows 0 and n-1 are frozen (c = 0). */
     double *inv = W->tmp, *c = W->ca;
-    for (size_t i = 0; i < n; i++) c[i] = ca * fa[i];
+    for (size_t i = 0; i < n; i++)
+        c[i] = ca * fa[i];
     c[0] = c[n - 1] = 0;
     size_t m = n / 2;
     inv[0] = inv[n - 1] = 1.0;
@@ -337,7 +352,8 @@ static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, do
     }
     /* the meeting row takes both eliminated neighbours */
     double wl = -c[m] * lo[m] * inv[m - 1], wr = -c[m] * hi[m] * inv[m + 1];
-    double dm = 1.0 + c[m] * (lo[m] + hi[m]) + wl * c[m - 1] * hi[m - 1] + wr * c[m + 1] * lo[m + 1];
+    double dm =
+        1.0 + c[m] * (lo[m] + hi[m]) + wl * c[m - 1] * hi[m - 1] + wr * c[m + 1] * lo[m + 1];
     u[m] = (rhs[m] - wl * rhs[m - 1] - wr * rhs[m + 1]) / dm;
     /* back substitution outwards along two chains */
     for (size_t t = 1; t <= m || m + t < n; t++) {
@@ -371,7 +387,8 @@ static void step_forward(const pde_grid *G, pde_work *W, const pde_step *st, dou
     tridiag(n, W->dl, W->dd, W->du, W->rhs);
     const double *y = W->rhs;
     double *v = W->tmp;
-    for (size_t i = 0; i < n; i++) v[i] = W->cb[i] * y[i];
+    for (size_t i = 0; i < n; i++)
+        v[i] = W->cb[i] * y[i];
     for (size_t i = 0; i < n; i++) {
         /* (D2^T v)_i = hi_{i-1} v_{i-1} - (lo_i + hi_i) v_i + lo_{i+1} v_{i+1} */
         double t = -(lo[i] + hi[i]) * v[i];
@@ -385,7 +402,8 @@ static void step_forward(const pde_grid *G, pde_work *W, const pde_step *st, dou
 static void fsq(const pde_grid *G, double k, double *f2)
 {
     if (isinf(k)) {
-        for (size_t i = 0; i < G->n; i++) f2[i] = 1.0;
+        for (size_t i = 0; i < G->n; i++)
+            f2[i] = 1.0;
         return;
     }
     for (size_t i = 0; i < G->n; i++) {
@@ -474,7 +492,8 @@ static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G,
         st = LJGAP_ENOMEM;
         goto fail_m;
     }
-    for (size_t i = 0; i < n; i++) u[i] = ljgap_sigma(G->g[i]);
+    for (size_t i = 0; i < n; i++)
+        u[i] = ljgap_sigma(G->g[i]);
     for (size_t j = M.m; j-- > 0;) {
         fsq_step(G, &W, &M.s[j], 0);
         step_backward(G, &W, &M.s[j], u);
@@ -484,9 +503,6 @@ static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G,
         }
     }
     C->work += (long)(n * M.m);
-    if (getenv("LJGAP_DEBUG"))
-        fprintf(stderr, "curve L=%d g_lo=%.4g g_hi=%.4g n=%zu m=%zu kmax=%.3g tau_rem=%.3g\n", L, g_lo,
-                g_hi, n, M.m, M.kmax, M.tau_rem);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(u[i])) {
             st = LJGAP_EFAIL;
@@ -508,7 +524,7 @@ fail:
 /* Everything a traction solve reports, at one level and one lower end. */
 typedef struct {
     size_t n;
-    double *sig;  /* sigma at the requested points */
+    double *sig; /* sigma at the requested points */
     ljgap_summary sum;
     int sum_ok;
 } curve_result;
@@ -565,7 +581,8 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
         d = fmax(d, fabs(a->sig[j] - b->sig[j]) / fmax(1.0, fabs(b->sig[j])));
     if (with_sum && a->sum_ok && b->sum_ok) {
         const ljgap_est *x = &a->sum.g_eq, *y = &b->sum.g_eq;
-        for (int q = 0; q < 4; q++) d = fmax(d, fabs(x[q].value - y[q].value) / fmax(1.0, fabs(y[q].value)));
+        for (int q = 0; q < 4; q++)
+            d = fmax(d, fabs(x[q].value - y[q].value) / fmax(1.0, fabs(y[q].value)));
     }
     return d;
 }
@@ -573,11 +590,10 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
 int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
-    if (getenv("LJGAP_DZ")) DZETA0 = atof(getenv("LJGAP_DZ"));
-    if (getenv("LJGAP_DX")) DXI0 = atof(getenv("LJGAP_DX"));
     pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
     double gmin = 1.0, gmax = 1.0;
-    for (size_t j = 0; j < n; j++) gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
+    for (size_t j = 0; j < n; j++)
+        gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
     double S = sqrt(variance_bound(psd));
     double g_hi = fmax(G_HI_MIN, fmax(3.0 * gmax, gmax + 30.0 * S));
     g_hi = fmax(g_hi, 12.0 * sqrt(psd->m0)); /* the analytic tail needs m0/g_hi^2 <= 0.01 */
@@ -602,8 +618,9 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
         trunc = d;
         if (d < 0.1 * o->tol) break;
         if (g_lo * G_LO_FACTOR < G_LO_FLOOR) {
-            ljgap_warn(w, "moving the lower grid end to g = %g still changes the answer by %.2g "
-                          "(relative): paths reach the wall region; the error includes this",
+            ljgap_warn(w,
+                       "moving the lower grid end to g = %g still changes the answer by %.2g "
+                       "(relative): paths reach the wall region; the error includes this",
                        g_lo, d);
             break;
         }
@@ -616,8 +633,9 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     for (;;) {
         st = curve_at(&C, g_lo, g_hi, L + 1, g_ave, n, &B, w);
         if (st == LJGAP_ECAP && L > 0) {
-            ljgap_warn(w, "work cap reached at resolution level %d: the error estimate is above "
-                          "the requested tolerance",
+            ljgap_warn(w,
+                       "work cap reached at resolution level %d: the error estimate is above "
+                       "the requested tolerance",
                        L);
             st = LJGAP_OK;
             break;
@@ -640,20 +658,19 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
             x[q].value += d / 3.0;
             x[q].err = fabs(d) / 3.0; /* two-level estimate, used if no third level */
         }
-        for (size_t j = 0; j < n; j++) sigma[j].err = fabs(A.sig[j] - B.sig[j]);
+        for (size_t j = 0; j < n; j++)
+            sigma[j].err = fabs(A.sig[j] - B.sig[j]);
         /* now A = plain level L+1, B = Richardson at L+1 */
         if (nR > 0) {
             est = curve_diff(&B, &P, want_sum) + trunc;
-            for (size_t j = 0; j < n; j++) sigma[j].err = fabs(B.sig[j] - P.sig[j]);
+            for (size_t j = 0; j < n; j++)
+                sigma[j].err = fabs(B.sig[j] - P.sig[j]);
             ljgap_est *p = &P.sum.g_eq;
-            for (int q = 0; q < 4; q++) x[q].err = fabs(x[q].value - p[q].value);
+            for (int q = 0; q < 4; q++)
+                x[q].err = fabs(x[q].value - p[q].value);
         } else {
             est = curve_diff(&B, &A, want_sum) + trunc;
         }
-        if (getenv("LJGAP_DEBUG"))
-            fprintf(stderr, "  L=%d geq=%.10f smax=%.10f gm=%.10f dg=%.10f est=%.3g\n", L + 1,
-                    B.sum.g_eq.value, B.sum.sigma_max.value, B.sum.g_at_max.value,
-                    B.sum.dgamma_eff.value, est);
         curve_result_free(&P);
         P = B;
         B = (curve_result){0};
@@ -674,7 +691,8 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     if (want_sum) {
         *sum = P.sum;
         ljgap_est *x = &sum->g_eq;
-        for (int q = 0; q < 4; q++) x[q].err += trunc * fmax(1.0, fabs(x[q].value));
+        for (int q = 0; q < 4; q++)
+            x[q].err += trunc * fmax(1.0, fabs(x[q].value));
     }
     st = LJGAP_OK;
 end:
@@ -717,7 +735,8 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
         st = LJGAP_ENOMEM;
         goto fail_m;
     }
-    for (size_t c = 0; c < nc; c++) snaps[c] = NULL;
+    for (size_t c = 0; c < nc; c++)
+        snaps[c] = NULL;
     p[i0] = 1.0;
     for (size_t j = 0; j < M.m; j++) {
         fsq_step(G, &W, &M.s[j], 1);
@@ -748,7 +767,8 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
     return LJGAP_OK;
 fail_m:
     march_free(&M);
-    for (size_t c = 0; c < nc; c++) free(snaps[c]), snaps[c] = NULL;
+    for (size_t c = 0; c < nc; c++)
+        free(snaps[c]), snaps[c] = NULL;
 fail:
     free(p);
     work_free(&W);
@@ -764,7 +784,8 @@ typedef struct {
 static void pdf_level_free(pdf_level *P, size_t nc)
 {
     if (P->p)
-        for (size_t c = 0; c < nc; c++) free(P->p[c]);
+        for (size_t c = 0; c < nc; c++)
+            free(P->p[c]);
     free(P->p);
     grid_free(&P->G);
     P->p = NULL;
@@ -787,21 +808,9 @@ static int pdf_level_run(pde_ctx *C, double g_ave, double g_lo, double g_hi, con
 static double snap_sigma(const pde_grid *G, const double *p)
 {
     double s = 0;
-    for (size_t i = 0; i < G->n; i++) s += p[i] * ljgap_sigma(G->g[i]);
+    for (size_t i = 0; i < G->n; i++)
+        s += p[i] * ljgap_sigma(G->g[i]);
     return s;
-}
-
-/* L1 distance between the densities of a coarse level (c) and the next finer one (f),
- * whose node 2i is the coarse node i. */
-static double pdf_l1(const pdf_level *c, const pdf_level *f, size_t snap)
-{
-    double d = 0;
-    for (size_t i = 0; i < c->G.n; i++) {
-        double pc = c->p[snap][i] / c->G.wt[i];
-        double pf = f->p[snap][2 * i] / f->G.wt[2 * i];
-        d += fabs(pc - pf) * c->G.wt[i];
-    }
-    return d;
 }
 
 int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
@@ -814,14 +823,16 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
     pdf_level A = {0}, B = {0};
     int st = LJGAP_ENOMEM;
     if (!ord || !cuts) goto end;
-    for (size_t i = 0; i < nk2; i++) ord[i] = i;
+    for (size_t i = 0; i < nk2; i++)
+        ord[i] = i;
     for (size_t i = 1; i < nk2; i++)
         for (size_t j = i; j > 0 && k2[ord[j]] < k2[ord[j - 1]]; j--) {
             size_t t = ord[j];
             ord[j] = ord[j - 1];
             ord[j - 1] = t;
         }
-    for (size_t i = 0; i < nk2; i++) cuts[i] = fmin(k2[ord[i]], psd->k2);
+    for (size_t i = 0; i < nk2; i++)
+        cuts[i] = fmin(k2[ord[i]], psd->k2);
     double S = sqrt(variance_bound(psd));
     double g_hi = g_ave + 10.0 * S;
     double g_lo = fmax(fmin(0.6, 0.6 * g_ave), g_ave - 10.0 * S);
@@ -850,39 +861,73 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
             break;
         }
     }
-    /* refine until sigma and the density are within tolerance */
-    int L = 0;
-    double est_s = INFINITY, est_l1 = INFINITY;
+    /* Refine. Per snapshot: sigma and the density phi at the nodes of the coarser of the
+     * two finest levels, both Richardson-extrapolated (R = fine + (fine - coarse)/3); the
+     * error estimates compare R with the previous R (sigma; phi in L1 on the common nodes). */
+    int L = 0, nR = 0;
     double *sig_prev = calloc(nk2, sizeof *sig_prev), *sig_cur = calloc(nk2, sizeof *sig_cur);
-    double *l1 = calloc(nk2, sizeof *l1);
-    if (!sig_prev || !sig_cur || !l1) {
+    double *l1 = calloc(nk2, sizeof *l1), *serr = calloc(nk2, sizeof *serr);
+    double **ext = calloc(nk2, sizeof *ext);
+    pde_grid *eg = &A.G; /* grid on whose nodes ext lives (A's, once A is the coarser) */
+    pdf_level E = {0};   /* keeps the grid of ext */
+    if (!sig_prev || !sig_cur || !l1 || !serr || !ext) {
         st = LJGAP_ENOMEM;
-        free(sig_prev), free(sig_cur), free(l1);
-        goto end;
+        goto done;
     }
     for (;;) {
         st = pdf_level_run(&C, g_ave, g_lo, g_hi, cuts, nk2, L + 1, &B);
-        if (st == LJGAP_ECAP && L > 0) {
-            ljgap_warn(w, "work cap reached at resolution level %d: the error estimate is above "
-                          "the requested tolerance",
+        if (st == LJGAP_ECAP && nR > 0) {
+            ljgap_warn(w,
+                       "work cap reached at resolution level %d: the error estimate is above "
+                       "the requested tolerance",
                        L);
             st = LJGAP_OK;
             break;
         }
         if (st) break;
-        est_s = est_l1 = 0;
+        double est = 0;
         for (size_t c = 0; c < nk2; c++) {
-            sig_prev[c] = snap_sigma(&A.G, A.p[c]);
-            sig_cur[c] = snap_sigma(&B.G, B.p[c]);
-            l1[c] = pdf_l1(&A, &B, c) / 3.0;
-            est_s = fmax(est_s, fabs(sig_cur[c] - sig_prev[c]) / 3.0 / fmax(1.0, fabs(sig_cur[c])));
-            est_l1 = fmax(est_l1, l1[c]);
+            double sa = snap_sigma(&A.G, A.p[c]), sb = snap_sigma(&B.G, B.p[c]);
+            double r = sb + (sb - sa) / 3.0;
+            serr[c] = nR > 0 ? fabs(r - sig_prev[c]) : fabs(sb - sa) / 3.0;
+            sig_prev[c] = r;
+            sig_cur[c] = r;
+            est = fmax(est, serr[c] / fmax(1.0, fabs(r)));
+            /* extrapolated density on A's nodes */
+            double *e = malloc(A.G.n * sizeof *e);
+            if (!e) {
+                st = LJGAP_ENOMEM;
+                break;
+            }
+            for (size_t i = 0; i < A.G.n; i++) {
+                double pc = A.p[c][i] / A.G.wt[i], pf = B.p[c][2 * i] / B.G.wt[2 * i];
+                e[i] = pf + (pf - pc) / 3.0;
+            }
+            if (nR > 0) { /* ext_old lives on the even nodes of A */
+                double d = 0;
+                for (size_t i = 0; 2 * i < A.G.n; i++)
+                    d += fabs(e[2 * i] - ext[c][i]) * E.G.wt[i];
+                l1[c] = d;
+            } else {
+                double d = 0;
+                for (size_t i = 0; i < A.G.n; i++)
+                    d += fabs(e[i] - B.p[c][2 * i] / B.G.wt[2 * i]) * A.G.wt[i];
+                l1[c] = d;
+            }
+            free(ext[c]);
+            ext[c] = e;
+            est = fmax(est, l1[c]);
         }
-        pdf_level_free(&A, nk2);
+        if (st) break;
+        /* A (level L) becomes the grid of ext; B becomes the new A */
+        pdf_level_free(&E, nk2);
+        E = A;
         A = B;
         B = (pdf_level){0};
+        eg = &E.G;
         L++;
-        if (fmax(est_s, est_l1) <= o->tol) break;
+        nR++;
+        if (nR >= 2 && est <= o->tol) break;
         if (L >= MAX_LEVEL - 1) {
             ljgap_warn(w, "finest resolution level reached: the error estimate is above the "
                           "requested tolerance");
@@ -890,19 +935,20 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
         }
     }
     if (st == LJGAP_OK) {
-        /* A is the finest level; output its density */
+        /* output the extrapolated density on eg's nodes; mass and mean of the finest
+         * discrete solution (the invariants of the scheme) */
+        const pde_grid *G = eg;
         for (size_t c = 0; c < nk2 && st == LJGAP_OK; c++) {
             ljgap_pdf *P = &out[ord[c]];
-            const double *p = A.p[c];
-            const pde_grid *G = &A.G;
+            const double *phi = ext[c];
             P->k2 = k2[ord[c]];
             double mass = 0, mean = 0;
-            for (size_t i = 0; i < G->n; i++) mass += p[i], mean += p[i] * G->g[i];
+            for (size_t i = 0; i < A.G.n; i++)
+                mass += A.p[c][i], mean += A.p[c][i] * A.G.g[i];
             P->mass = mass;
             P->mean = mean;
-            double d = sig_cur[c] - sig_prev[c];
-            P->sigma.value = sig_cur[c] + d / 3.0;
-            P->sigma.err = fabs(d) / 3.0 + trunc * fmax(1.0, fabs(sig_cur[c]));
+            P->sigma.value = sig_cur[c];
+            P->sigma.err = serr[c] + trunc * fmax(1.0, fabs(sig_cur[c]));
             P->phi_err = l1[c];
             if (grid) {
                 size_t m = (size_t)grid[2];
@@ -921,23 +967,27 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
                         P->phi[q] = 0;
                         continue;
                     }
-                    while (i + 2 < G->n && G->g[i + 1] < x) i++;
+                    while (i + 2 < G->n && G->g[i + 1] < x)
+                        i++;
                     double t = (x - G->g[i]) / (G->g[i + 1] - G->g[i]);
-                    P->phi[q] = (1 - t) * p[i] / G->wt[i] + t * p[i + 1] / G->wt[i + 1];
+                    P->phi[q] = (1 - t) * phi[i] + t * phi[i + 1];
                 }
             } else {
-                /* the nodes where the density is not negligible */
+                /* the nodes where the density is not negligible, at most ~2000 */
                 double pmax = 0;
-                for (size_t i = 0; i < G->n; i++) pmax = fmax(pmax, p[i] / G->wt[i]);
-                size_t a = 0, b = G->n - 1;
-                while (a < b && p[a] / G->wt[a] < 1e-12 * pmax) a++;
-                while (b > a && p[b] / G->wt[b] < 1e-12 * pmax) b--;
-                a = a > 0 ? a - 1 : a;
-                b = b + 1 < G->n ? b + 1 : b;
-                /* at most ~2000 points: thin out uniformly */
+                for (size_t i = 0; i < G->n; i++)
+                    pmax = fmax(pmax, phi[i]);
+                size_t a0 = 0, b0 = G->n - 1;
+                while (a0 < b0 && fabs(phi[a0]) < 1e-12 * pmax)
+                    a0++;
+                while (b0 > a0 && fabs(phi[b0]) < 1e-12 * pmax)
+                    b0--;
+                a0 = a0 > 0 ? a0 - 1 : a0;
+                b0 = b0 + 1 < G->n ? b0 + 1 : b0;
                 size_t stride = 1;
-                while ((b - a) / stride > 2000) stride++;
-                size_t m = (b - a) / stride + 1;
+                while ((b0 - a0) / stride > 2000)
+                    stride++;
+                size_t m = (b0 - a0) / stride + 1;
                 P->n = m;
                 P->g = malloc(m * sizeof(double));
                 P->phi = malloc(m * sizeof(double));
@@ -946,13 +996,19 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
                     break;
                 }
                 for (size_t q = 0; q < m; q++) {
-                    size_t i = a + q * stride;
-                    P->g[q] = G->g[i];
-                    P->phi[q] = p[i] / G->wt[i];
+                    P->g[q] = G->g[a0 + q * stride];
+                    P->phi[q] = phi[a0 + q * stride];
                 }
             }
         }
     }
+done:
+    if (ext)
+        for (size_t c = 0; c < nk2; c++)
+            free(ext[c]);
+    free(ext);
+    free(serr);
+    pdf_level_free(&E, nk2);
     free(sig_prev);
     free(sig_cur);
     free(l1);
@@ -961,5 +1017,20 @@ end:
     pdf_level_free(&B, nk2);
     free(ord);
     free(cuts);
+    return st;
+}
+
+int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, int level,
+                               ljgap_summary *sum)
+{
+    ljgap_opts o;
+    ljgap_opts_default(&o);
+    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    curve_result R;
+    int st = curve_at(&C, g_lo, g_hi, level, NULL, 0, &R, NULL);
+    if (st) return st;
+    *sum = R.sum;
+    st = R.sum_ok ? LJGAP_OK : LJGAP_EFAIL;
+    curve_result_free(&R);
     return st;
 }

@@ -23,8 +23,10 @@ static double seg_var(double Pj, double kj, double q, double ka, double kb)
     double e = q + 2.0;
     double xa = log(ka / kj), dx = log1p((kb - ka) / ka);
     double r;
-    if (fabs(e * (xa + dx)) < 1e-12) r = dx;
-    else r = exp(e * xa) * expm1(e * dx) / e;
+    if (fabs(e * (xa + dx)) < 1e-12)
+        r = dx;
+    else
+        r = exp(e * xa) * expm1(e * dx) / e;
     return 2.0 * M_PI * Pj * kj * kj * r;
 }
 
@@ -47,8 +49,7 @@ static void psd_zero(ljgap_psd *p)
     memset(p, 0, sizeof *p);
 }
 
-int ljgap_psd_power(ljgap_psd *psd, double D, double k1, double k2, ljgap_level lk,
-                    double level)
+int ljgap_psd_power(ljgap_psd *psd, double D, double k1, double k2, ljgap_level lk, double level)
 {
     if (!(D > 2 && D < 3) || !(k1 > 0) || !isfinite(k1) || !(k2 > k1) || !(level > 0) ||
         !isfinite(level) || isnan(k2))
@@ -62,14 +63,26 @@ int ljgap_psd_power(ljgap_psd *psd, double D, double k1, double k2, ljgap_level 
     double q = 2.0 * D - 8.0;
     /* variance of C = 1 */
     double v1;
-    if (isinf(k2)) v1 = 2.0 * M_PI * pow(k1, q + 2.0) / -(q + 2.0);
-    else v1 = seg_var(pow(k1, q), k1, q, k1, k2);
+    if (isinf(k2))
+        v1 = 2.0 * M_PI * pow(k1, q + 2.0) / -(q + 2.0);
+    else
+        v1 = seg_var(pow(k1, q), k1, q, k1, k2);
     double m0;
     switch (lk) {
-    case LJGAP_LEVEL_C: p.C = level; m0 = level * v1; break;
-    case LJGAP_LEVEL_M0: m0 = level; p.C = level / v1; break;
-    case LJGAP_LEVEL_HRMS: m0 = level * level; p.C = m0 / v1; break;
-    default: return LJGAP_EINVAL;
+    case LJGAP_LEVEL_C:
+        p.C = level;
+        m0 = level * v1;
+        break;
+    case LJGAP_LEVEL_M0:
+        m0 = level;
+        p.C = level / v1;
+        break;
+    case LJGAP_LEVEL_HRMS:
+        m0 = level * level;
+        p.C = m0 / v1;
+        break;
+    default:
+        return LJGAP_EINVAL;
     }
     if (!(m0 > 0) || !isfinite(m0) || !(p.C > 0) || !isfinite(p.C)) return LJGAP_EINVAL;
     p.m0 = m0;
@@ -82,8 +95,7 @@ int ljgap_psd_table(ljgap_psd *psd, const double *k, const double *P, size_t n, 
 {
     if (n < 2) return LJGAP_EINVAL;
     for (size_t i = 0; i < n; i++) {
-        if (!(k[i] > 0) || !isfinite(k[i]) || !(P[i] > 0) || !isfinite(P[i]))
-            return LJGAP_EINVAL;
+        if (!(k[i] > 0) || !isfinite(k[i]) || !(P[i] > 0) || !isfinite(P[i])) return LJGAP_EINVAL;
         if (i > 0 && !(k[i] > k[i - 1])) return LJGAP_EINVAL;
     }
     if (has_tail && !(tail_q < -2.0)) return LJGAP_EINVAL;
@@ -145,9 +157,9 @@ int ljgap_psd_truncate(ljgap_psd *out, const ljgap_psd *psd, double kc)
     }
     /* table: keep the nodes below kc and add one at kc */
     size_t m = 0;
-    while (m < psd->n && psd->k[m] < kc) m++;
-    if (m == psd->n && !psd->has_tail)
-        return ljgap_psd_table(out, psd->k, psd->P, psd->n, 0, 0.0);
+    while (m < psd->n && psd->k[m] < kc)
+        m++;
+    if (m == psd->n && !psd->has_tail) return ljgap_psd_table(out, psd->k, psd->P, psd->n, 0, 0.0);
     double *k = malloc((m + 1) * sizeof *k), *P = malloc((m + 1) * sizeof *P);
     if (!k || !P) {
         free(k);
@@ -157,8 +169,10 @@ int ljgap_psd_truncate(ljgap_psd *out, const ljgap_psd *psd, double kc)
     memcpy(k, psd->k, m * sizeof *k);
     memcpy(P, psd->P, m * sizeof *P);
     size_t n = m;
-    if (m < psd->n && psd->k[m] == kc) P[n] = psd->P[m], k[n++] = kc;
-    else k[n] = kc, P[n] = ljgap_psd_eval(psd, kc), n++;
+    if (m < psd->n && psd->k[m] == kc)
+        P[n] = psd->P[m], k[n++] = kc;
+    else
+        k[n] = kc, P[n] = ljgap_psd_eval(psd, kc), n++;
     int st = ljgap_psd_table(out, k, P, n, 0, 0.0);
     free(k);
     free(P);
@@ -172,8 +186,10 @@ static size_t table_seg(const ljgap_psd *p, double k)
     if (k >= p->k[hi]) return hi;
     while (hi - lo > 1) {
         size_t mid = (lo + hi) / 2;
-        if (p->k[mid] <= k) lo = mid;
-        else hi = mid;
+        if (p->k[mid] <= k)
+            lo = mid;
+        else
+            hi = mid;
     }
     return lo;
 }
@@ -223,12 +239,15 @@ double ljgap_psd_k_of_cumvar(const ljgap_psd *p, double tau)
         return k < p->k2 ? k : p->k2;
     }
     size_t lo = 0, hi = p->n - 1;
-    if (tau >= p->cum[hi]) lo = hi;
+    if (tau >= p->cum[hi])
+        lo = hi;
     else
         while (hi - lo > 1) {
             size_t mid = (lo + hi) / 2;
-            if (p->cum[mid] <= tau) lo = mid;
-            else hi = mid;
+            if (p->cum[mid] <= tau)
+                lo = mid;
+            else
+                hi = mid;
         }
     double k = seg_inv(p->P[lo], p->k[lo], p->q[lo], p->k[lo], tau - p->cum[lo]);
     if (lo + 1 < p->n && k > p->k[lo + 1]) k = p->k[lo + 1];
@@ -256,8 +275,8 @@ static double packet_piece(const ljgap_psd *p, double g0, double ka, double kb)
             double w = c + (i < 4 ? -gl_x[i] : gl_x[i - 4]) * 0.5 * hw;
             double s = k0 + exp(w);
             double f = ljgap_f(g0, s);
-            sum += gl_w[i & 3] * 0.5 * hw * 2.0 * M_PI * s * ljgap_psd_eval(p, s) * f * f *
-                   (s - k0);
+            sum +=
+                gl_w[i & 3] * 0.5 * hw * 2.0 * M_PI * s * ljgap_psd_eval(p, s) * f * f * (s - k0);
         }
     }
     return sum;

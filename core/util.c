@@ -10,13 +10,20 @@
 const char *ljgap_strerror(int status)
 {
     switch (status) {
-    case LJGAP_OK: return "success";
-    case LJGAP_EINVAL: return "input outside the model's domain";
-    case LJGAP_ENOMEM: return "out of memory";
-    case LJGAP_ECAP: return "the request needs more work than the server's caps allow";
-    case LJGAP_EFAIL: return "numerical failure";
-    case LJGAP_ECANCEL: return "cancelled";
-    default: return "unknown status";
+    case LJGAP_OK:
+        return "success";
+    case LJGAP_EINVAL:
+        return "input outside the model's domain";
+    case LJGAP_ENOMEM:
+        return "out of memory";
+    case LJGAP_ECAP:
+        return "the request needs more work than the server's caps allow";
+    case LJGAP_EFAIL:
+        return "numerical failure";
+    case LJGAP_ECANCEL:
+        return "cancelled";
+    default:
+        return "unknown status";
     }
 }
 

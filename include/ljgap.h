@@ -37,13 +37,12 @@ const char *ljgap_strerror(int status);
 #define LJGAP_MAX_WARN 8
 #define LJGAP_WARN_LEN 240
 typedef struct {
-    int n;                                     /* number of messages in msg */
+    int n;                                    /* number of messages in msg */
     char msg[LJGAP_MAX_WARN][LJGAP_WARN_LEN]; /* human-readable, one sentence each */
 } ljgap_warnings;
 /* Append a printf-style message; extra messages beyond LJGAP_MAX_WARN are dropped.
  * w may be NULL. Identical messages are not repeated. */
-void ljgap_warn(ljgap_warnings *w, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
+void ljgap_warn(ljgap_warnings *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /* A value with its estimated absolute error. */
 typedef struct {
@@ -52,13 +51,13 @@ typedef struct {
 } ljgap_est;
 
 /* ---- lj.c: the Lennard-Jones law and the gap transfer function ---- */
-double ljgap_sigma(double g);         /* sigma/sigma0 of (8),(9): (3√3/2)(g^-3 - g^-9) */
-double ljgap_sigma_work(double g);    /* ∫_g^∞ sigma/sigma0 dg' */
-double ljgap_f(double g, double k);   /* f(g,k) of (14) */
-double ljgap_k0(void);                /* (324/3125)^(1/3) of (19) */
-double ljgap_gstar(void);             /* (15/2)^(1/6) */
-double ljgap_g_sigma_max(void);       /* 3^(1/6), where sigma/sigma0 = 1 */
-double ljgap_flat_work(void);         /* 9√3/16 = ∫_1^∞ sigma/sigma0 dg */
+double ljgap_sigma(double g);       /* sigma/sigma0 of (8),(9): (3√3/2)(g^-3 - g^-9) */
+double ljgap_sigma_work(double g);  /* ∫_g^∞ sigma/sigma0 dg' */
+double ljgap_f(double g, double k); /* f(g,k) of (14) */
+double ljgap_k0(void);              /* (324/3125)^(1/3) of (19) */
+double ljgap_gstar(void);           /* (15/2)^(1/6) */
+double ljgap_g_sigma_max(void);     /* 3^(1/6), where sigma/sigma0 = 1 */
+double ljgap_flat_work(void);       /* 9√3/16 = ∫_1^∞ sigma/sigma0 dg */
 /* E[sigma(g+X)] and E[sigma_work(g+X)], X ~ N(0,V), by the asymptotic series in V/g^2.
  * Valid (relative error < 1e-12) for V/g^2 <= 0.01, g > 0; returns NAN outside. */
 double ljgap_sigma_smoothed(double g, double V);
@@ -89,8 +88,7 @@ typedef enum { LJGAP_LEVEL_C = 0, LJGAP_LEVEL_M0 = 1, LJGAP_LEVEL_HRMS = 2 } ljg
 
 /* Power law (6) on [k1,k2] (k2 = INFINITY allowed for D < 3), level from C, m0 or h_rms.
  * Returns LJGAP_EINVAL (psd untouched) when 2<D<3, 0<k1<k2, level>0 do not hold. */
-int ljgap_psd_power(ljgap_psd *psd, double D, double k1, double k2, ljgap_level lk,
-                    double level);
+int ljgap_psd_power(ljgap_psd *psd, double D, double k1, double k2, ljgap_level lk, double level);
 /* Table of n >= 2 points (copied), optional tail exponent q < -2 (has_tail != 0). */
 int ljgap_psd_table(ljgap_psd *psd, const double *k, const double *P, size_t n, int has_tail,
                     double tail_q);
@@ -139,14 +137,14 @@ int ljgap_traction(const ljgap_psd *psd, const ljgap_opts *o, const double *g_av
 
 /* One gap PDF snapshot. */
 typedef struct {
-    double k2;        /* upper cut-off of this snapshot (INFINITY for the whole PSD) */
-    size_t n;         /* number of points */
-    double *g;        /* owned: gaps */
-    double *phi;      /* owned: probability density at g */
-    double mass;      /* ∫ phi dg (discrete) */
-    double mean;      /* ∫ g phi dg (discrete) */
-    ljgap_est sigma;  /* ∫ phi sigma dg, with error */
-    double phi_err;   /* estimated L1 error of phi */
+    double k2;       /* upper cut-off of this snapshot (INFINITY for the whole PSD) */
+    size_t n;        /* number of points */
+    double *g;       /* owned: gaps */
+    double *phi;     /* owned: probability density at g */
+    double mass;     /* ∫ phi dg (discrete) */
+    double mean;     /* ∫ g phi dg (discrete) */
+    ljgap_est sigma; /* ∫ phi sigma dg, with error */
+    double phi_err;  /* estimated L1 error of phi */
 } ljgap_pdf;
 
 /* PDFs of the gap at mean gap g_ave for the PSD truncated at each k2[i] (INFINITY = whole
@@ -167,8 +165,8 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
 /* ---- solver entry points per method (called by ljgap_traction / ljgap_pdf_compute) ---- */
 int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
-int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave,
-                         size_t n, ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
+int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+                         ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
 int ljgap_traction_mc(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
 int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,

@@ -1,0 +1,13 @@
+/* pde.h -- internals of the PDE solver exposed for tests and benchmarks. */
+#ifndef LJGAP_PDE_H
+#define LJGAP_PDE_H
+
+#include "ljgap.h"
+
+/* The adhesion summary from one backward solve at resolution level `level` (grid spacing
+ * and steps halve per level) on [g_lo, g_hi], without extrapolation: for measuring the
+ * convergence order. */
+int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, int level,
+                               ljgap_summary *sum);
+
+#endif

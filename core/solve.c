@@ -1,0 +1,78 @@
+/* solve.c -- method dispatch: one entry point per question, one file per method.
+ *
+ *   pde         the continuum limit of the paper's algorithm (theory.md §2), pde.c
+ *   paper       the paper's iteration (16)-(18) as printed, paper.c
+ *   montecarlo  the Itô process behind (18), simulated path by path, mc.c
+ *
+ * Checks common to every method live here: the theory needs k1 > k0 (19).
+ */
+#include "ljgap.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static int check_common(const ljgap_psd *psd, const ljgap_opts *o, ljgap_warnings *w)
+{
+    if (!psd || !o) return LJGAP_EINVAL;
+    if (!(psd->k1 > ljgap_k0())) {
+        ljgap_warn(w,
+                   "k1 = %g is at or below k0 = %.5f: the gap transfer (14) has a pole "
+                   "(negative stiffness, (19)) and the theory does not apply",
+                   psd->k1, ljgap_k0());
+        return LJGAP_EINVAL;
+    }
+    if (!(o->tol > 0) || !isfinite(o->tol)) return LJGAP_EINVAL;
+    return LJGAP_OK;
+}
+
+int ljgap_traction(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+                   ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
+{
+    int st = check_common(psd, o, w);
+    if (st) return st;
+    for (size_t i = 0; i < n; i++)
+        if (!(g_ave[i] > 0) || !isfinite(g_ave[i])) return LJGAP_EINVAL;
+    switch (o->method) {
+    case LJGAP_METHOD_PDE:
+        return ljgap_traction_pde(psd, o, g_ave, n, sigma, sum, w);
+    case LJGAP_METHOD_PAPER:
+        return ljgap_traction_paper(psd, o, g_ave, n, sigma, sum, w);
+    case LJGAP_METHOD_MC:
+        return ljgap_traction_mc(psd, o, g_ave, n, sigma, sum, w);
+    }
+    return LJGAP_EINVAL;
+}
+
+int ljgap_pdf_compute(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
+                      size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
+{
+    int st = check_common(psd, o, w);
+    if (st) return st;
+    if (!(g_ave > 0) || !isfinite(g_ave)) return LJGAP_EINVAL;
+    for (size_t i = 0; i < nk2; i++) {
+        out[i].g = out[i].phi = NULL;
+        out[i].n = 0;
+        if (!(k2[i] > psd->k1)) return LJGAP_EINVAL;
+    }
+    if (grid && !(grid[0] < grid[1] && grid[0] > 0 && grid[2] >= 2)) return LJGAP_EINVAL;
+    switch (o->method) {
+    case LJGAP_METHOD_PDE:
+        return ljgap_pdf_pde(psd, o, g_ave, k2, nk2, grid, out, w);
+    case LJGAP_METHOD_PAPER:
+        return ljgap_pdf_paper(psd, o, g_ave, k2, nk2, grid, out, w);
+    case LJGAP_METHOD_MC:
+        return ljgap_pdf_mc(psd, o, g_ave, k2, nk2, grid, out, w);
+    }
+    return LJGAP_EINVAL;
+}
+
+void ljgap_pdf_release(ljgap_pdf *p, size_t n)
+{
+    if (!p) return;
+    for (size_t i = 0; i < n; i++) {
+        free(p[i].g);
+        free(p[i].phi);
+        p[i].g = p[i].phi = NULL;
+        p[i].n = 0;
+    }
+}
