@@ -1,0 +1,800 @@
+/* test_handler.c -- the request handler against shared/docs/api.md.
+ *
+ * One test per validation rule: each sends a request that is valid except for one thing and
+ * asserts a 422 validation problem whose errors[] holds exactly one entry, at the expected
+ * JSON pointer. Then the other problem statuses (400, 404, cap, cancel, out of memory, by
+ * failing cJSON's allocator at every allocation in turn), and the success paths of each
+ * endpoint, checked against invariants (mass, mean, m0 -> 0 limits) and theory.md §4.
+ *
+ * Requests are written with ' for " to keep them readable; req() swaps them.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include "handler.h"
+#include "ljgap.h"
+
+#include <cjson/cJSON.h>
+#include <gsl/gsl_errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PSD "{'kind':'power','D':2.5,'k1':1,'k2':8,'m0':0.5}"
+#define PSD_INF "{'kind':'power','D':2.5,'k1':1,'m0':0.5}"
+
+/* The answer of one request: status, content type and the parsed body. */
+typedef struct {
+    int status;
+    const char *ctype;
+    cJSON *body;
+} answer;
+
+static answer ask(const char *endpoint, const char *request)
+{
+    char *s = strdup(request);
+    ljgap_reply r;
+    answer a;
+    assert_non_null(s);
+    for (char *c = s; *c; c++)
+        if (*c == '\'') *c = '"';
+    ljgap_handle(endpoint, s, strlen(s), &r);
+    assert_non_null(r.body);
+    assert_int_equal(r.len, strlen(r.body));
+    a.status = r.status;
+    a.ctype = r.content_type;
+    a.body = cJSON_Parse(r.body);
+    if (!a.body) fail_msg("answer is not JSON: %s", r.body);
+    ljgap_reply_free(&r);
+    free(s);
+    return a;
+}
+
+static const char *str(const cJSON *o, const char *name)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(o, name);
+    assert_true(cJSON_IsString(it));
+    return it->valuestring;
+}
+
+static double num(const cJSON *o, const char *name)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(o, name);
+    if (!cJSON_IsNumber(it)) fail_msg("field %s is not a number", name);
+    return it->valuedouble;
+}
+
+static const cJSON *get(const cJSON *o, const char *name)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(o, name);
+    if (!it) fail_msg("field %s is missing", name);
+    return it;
+}
+
+/* The problem+json shape; returns errors[]. */
+static const cJSON *check_problem(const answer *a, int status, const char *type_slug)
+{
+    char type[120];
+    snprintf(type, sizeof type, "https://ljgap.example/problems/%s", type_slug);
+    assert_int_equal(a->status, status);
+    assert_string_equal(a->ctype, "application/problem+json");
+    assert_string_equal(str(a->body, "type"), type);
+    assert_true(strlen(str(a->body, "title")) > 0);
+    assert_true(strlen(str(a->body, "detail")) > 0);
+    assert_int_equal((int)num(a->body, "status"), status);
+    assert_true(cJSON_IsArray(get(a->body, "errors")));
+    return get(a->body, "errors");
+}
+
+/* A 422 validation problem with exactly one error, at pointer. */
+static void expect_pointer(const char *endpoint, const char *request, const char *pointer)
+{
+    answer a = ask(endpoint, request);
+    const cJSON *errs = check_problem(&a, 422, "validation");
+    const cJSON *e = cJSON_GetArrayItem(errs, 0);
+    if (cJSON_GetArraySize(errs) != 1 || strcmp(str(e, "pointer"), pointer) != 0) {
+        char *s = cJSON_PrintUnformatted(errs);
+        fail_msg("expected one error at \"%s\", got %s", pointer, s);
+    }
+    assert_true(strlen(str(e, "detail")) > 0);
+    cJSON_Delete(a.body);
+}
+
+/* ---- the psd object ---- */
+
+static void k1_at_or_below_k0(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':0.4,'k2':8,'m0':0.5}}",
+                   "/psd/k1");
+    /* the exact k0 is outside too */
+    char req[200];
+    snprintf(req, sizeof req, "{'psd':{'kind':'power','D':2.5,'k1':%.17g,'m0':0.5}}", ljgap_k0());
+    expect_pointer("adhesion", req, "/psd/k1");
+}
+
+static void k1_message_explains_k0(void **state)
+{
+    answer a = ask("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':0.3,'m0':0.5}}");
+    const cJSON *e = cJSON_GetArrayItem(check_problem(&a, 422, "validation"), 0);
+    assert_non_null(strstr(str(e, "detail"), "0.46978"));
+    assert_non_null(strstr(str(e, "detail"), "(19)"));
+    cJSON_Delete(a.body);
+}
+
+static void table_k0_below_k0(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[0.4,2,3],'P':[1,1,1]}}", "/psd/k/0");
+}
+
+static void D_outside(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':3,'k1':1,'k2':8,'m0':0.5}}", "/psd/D");
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2,'k1':1,'k2':8,'m0':0.5}}", "/psd/D");
+}
+
+static void H_outside(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','H':1.2,'k1':1,'m0':0.5}}", "/psd/H");
+}
+
+static void D_and_H(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'H':0.5,'k1':1,'m0':0.5}}",
+                   "/psd/H");
+}
+
+static void D_missing(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','k1':1,'m0':0.5}}", "/psd/D");
+}
+
+static void k2_not_above_k1(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':2,'k2':2,'m0':0.5}}",
+                   "/psd/k2");
+}
+
+static void non_finite_number(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':1e999}}", "/psd/m0");
+}
+
+static void non_positive_number(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'C':0}}", "/psd/C");
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'h_rms':-1}}", "/psd/h_rms");
+}
+
+static void wrong_type(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':'2.5','k1':1,'m0':0.5}}", "/psd/D");
+    expect_pointer("adhesion", "{'psd':" PSD ",'tol':true}", "/tol");
+    expect_pointer("adhesion", "{'psd':[1]}", "/psd");
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':3}", "/method");
+}
+
+static void missing_psd(void **state)
+{
+    expect_pointer("adhesion", "{}", "/psd");
+}
+
+static void missing_k1(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'m0':0.5}}", "/psd/k1");
+}
+
+static void missing_kind(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'D':2.5,'k1':1,'m0':0.5}}", "/psd/kind");
+}
+
+static void two_level_fields(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':0.5,'h_rms':0.7}}",
+                   "/psd/h_rms");
+}
+
+static void no_level_field(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1}}", "/psd");
+}
+
+static void unknown_kind(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'fractal','D':2.5,'k1':1,'m0':0.5}}", "/psd/kind");
+}
+
+static void table_unsorted(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,2,3],'P':[1,1,1,1]}}", "/psd/k/2");
+}
+
+static void table_non_positive(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,3,4],'P':[1,1,1,0]}}", "/psd/P/3");
+}
+
+static void table_length_mismatch(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,3],'P':[1,1]}}", "/psd/P");
+}
+
+static void table_too_short(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1],'P':[1,1]}}", "/psd/k");
+}
+
+static void table_too_long(void **state)
+{
+    size_t n = 10001, cap = 40 * n + 100, used;
+    char *req = malloc(cap);
+    assert_non_null(req);
+    used = (size_t)sprintf(req, "{'psd':{'kind':'table','k':[");
+    for (size_t i = 0; i < n; i++)
+        used += (size_t)sprintf(req + used, "%s%zu", i ? "," : "", i + 1);
+    used += (size_t)sprintf(req + used, "],'P':[");
+    for (size_t i = 0; i < n; i++)
+        used += (size_t)sprintf(req + used, "%s1", i ? "," : "");
+    sprintf(req + used, "]}}");
+    answer a = ask("adhesion", req);
+    const cJSON *errs = check_problem(&a, 422, "validation");
+    assert_int_equal(cJSON_GetArraySize(errs), 2);
+    assert_string_equal(str(cJSON_GetArrayItem(errs, 0), "pointer"), "/psd/k");
+    assert_string_equal(str(cJSON_GetArrayItem(errs, 1), "pointer"), "/psd/P");
+    cJSON_Delete(a.body);
+    free(req);
+}
+
+static void tail_exponent(void **state)
+{
+    expect_pointer("adhesion",
+                   "{'psd':{'kind':'table','k':[1,2],'P':[1,1],'tail':{'exponent':-2}}}",
+                   "/psd/tail/exponent");
+}
+
+static void unknown_psd_field(void **state)
+{
+    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':0.5,'m_0':1}}",
+                   "/psd/m_0");
+}
+
+/* ---- common fields ---- */
+
+static void unknown_method(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'fem'}", "/method");
+}
+
+static void tol_outside(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'tol':0}", "/tol");
+    expect_pointer("adhesion", "{'psd':" PSD ",'tol':0.2}", "/tol");
+}
+
+static void vmax_outside(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'paper','vmax':1.5}", "/vmax");
+}
+
+static void samples_bad(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':99}", "/samples");
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':1000.5}",
+                   "/samples");
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':2e6}", "/samples");
+}
+
+static void seed_bad(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','seed':-1}", "/seed");
+    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','seed':0.5}", "/seed");
+}
+
+static void unknown_top_field(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'tolerance':1e-3}", "/tolerance");
+    /* a field of another endpoint is unknown here */
+    expect_pointer("adhesion", "{'psd':" PSD ",'g_ave':[1]}", "/g_ave");
+}
+
+static void unknown_field_pointer_escaped(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'a/b~c':1}", "/a~1b~0c");
+}
+
+static void duplicate_field(void **state)
+{
+    expect_pointer("adhesion", "{'psd':" PSD ",'tol':1e-3,'tol':1e-4}", "/tol");
+}
+
+static void body_not_object(void **state)
+{
+    expect_pointer("adhesion", "[1,2]", "");
+    expect_pointer("adhesion", "42", "");
+}
+
+/* ---- traction ---- */
+
+static void traction_g_ave_missing(void **state)
+{
+    expect_pointer("traction", "{'psd':" PSD "}", "/g_ave");
+}
+
+static void traction_range_n(void **state)
+{
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':1}}", "/g_ave/n");
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':2.5}}", "/g_ave/n");
+}
+
+static void traction_range_order(void **state)
+{
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':3,'max':1,'n':5}}", "/g_ave/max");
+}
+
+static void traction_range_unknown(void **state)
+{
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':5,'step':1}}",
+                   "/g_ave/step");
+}
+
+static void traction_array_bad(void **state)
+{
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':[1,-2,3]}", "/g_ave/1");
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':[]}", "/g_ave");
+    expect_pointer("traction", "{'psd':" PSD ",'g_ave':'1'}", "/g_ave");
+}
+
+/* ---- pdf ---- */
+
+static void pdf_null_needs_infinite_support(void **state)
+{
+    expect_pointer("pdf", "{'psd':" PSD ",'g_ave':1,'k2':[null]}", "/k2/0");
+}
+
+static void pdf_k2_not_above_k1(void **state)
+{
+    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':1,'k2':[5,1]}", "/k2/1");
+}
+
+static void pdf_g_ave_bad(void **state)
+{
+    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':[1],'k2':[5]}", "/g_ave");
+}
+
+static void pdf_grid_bad(void **state)
+{
+    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':1,'k2':[5],'grid':{'min':0,'max':2,'n':9}}",
+                   "/grid/min");
+}
+
+/* ---- sweep ---- */
+
+static void sweep_needs_power_law(void **state)
+{
+    expect_pointer("sweep",
+                   "{'psd':{'kind':'table','k':[1,2],'P':[1,1]},'vary':'m0','values':[0.1]}",
+                   "/psd/kind");
+}
+
+static void sweep_vary_unknown(void **state)
+{
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'k2','values':[3]}", "/vary");
+}
+
+static void sweep_values_bad(void **state)
+{
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'D','values':[2.2,2.5,3.1]}", "/values/2");
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'k1','values':[2,0.3]}", "/values/1");
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[0.1,0]}", "/values/1");
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[]}", "/values");
+}
+
+static void sweep_too_many_values(void **state)
+{
+    ljgap_limits l;
+    ljgap_limits_default(&l);
+    l.max_points = 2;
+    ljgap_handler_set_limits(&l);
+    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[0.1,0.2,0.3]}", "/values");
+    ljgap_limits_default(&l);
+    ljgap_handler_set_limits(&l);
+}
+
+/* ---- problems other than validation ---- */
+
+static void all_errors_collected(void **state)
+{
+    answer a = ask("adhesion", "{'psd':{'kind':'power','D':3.5,'k1':0.2,'m0':-1},'tol':5,"
+                               "'seed':-3,'x':1}");
+    const cJSON *errs = check_problem(&a, 422, "validation");
+    static const char *const want[] = {"/x", "/tol", "/seed", "/psd/D", "/psd/k1", "/psd/m0"};
+    assert_int_equal(cJSON_GetArraySize(errs), 6);
+    for (int i = 0; i < 6; i++) {
+        int found = 0;
+        const cJSON *e;
+        cJSON_ArrayForEach(e, errs) found |= strcmp(str(e, "pointer"), want[i]) == 0;
+        if (!found) fail_msg("no error at %s", want[i]);
+    }
+    cJSON_Delete(a.body);
+}
+
+static void errors_capped(void **state)
+{
+    size_t n = 300, used;
+    char *req = malloc(20 * n + 200);
+    assert_non_null(req);
+    used = (size_t)sprintf(req, "{'psd':{'kind':'table','k':[");
+    for (size_t i = 0; i < n; i++)
+        used += (size_t)sprintf(req + used, "%s%zu", i ? "," : "", i + 1);
+    used += (size_t)sprintf(req + used, "],'P':[");
+    for (size_t i = 0; i < n; i++)
+        used += (size_t)sprintf(req + used, "%s-1", i ? "," : "");
+    sprintf(req + used, "]}}");
+    answer a = ask("adhesion", req);
+    assert_int_equal(cJSON_GetArraySize(check_problem(&a, 422, "validation")), 100);
+    assert_non_null(strstr(str(a.body, "detail"), "300"));
+    cJSON_Delete(a.body);
+    free(req);
+}
+
+static void malformed_json(void **state)
+{
+    static const char *const bad[] = {"{", "{'psd':}", "{} x", "", "nul", "{'a':1}{}"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        answer a = ask("adhesion", bad[i]);
+        assert_int_equal(cJSON_GetArraySize(check_problem(&a, 400, "malformed-json")), 0);
+        cJSON_Delete(a.body);
+    }
+}
+
+static void body_not_nul_terminated(void **state)
+{
+    /* the handler reads len bytes only: "{}" followed by garbage it must not see */
+    const char buf[] = "{}garbage";
+    ljgap_reply r;
+    ljgap_handle("adhesion", buf, 2, &r);
+    assert_int_equal(r.status, 422); /* {} is valid JSON without psd */
+    assert_non_null(strstr(r.body, "/psd"));
+    ljgap_reply_free(&r);
+    ljgap_handle("adhesion", buf, 4, &r);
+    assert_int_equal(r.status, 400);
+    ljgap_reply_free(&r);
+}
+
+static void unknown_endpoint(void **state)
+{
+    answer a = ask("adhesions", "{}");
+    check_problem(&a, 404, "not-found");
+    cJSON_Delete(a.body);
+    a = ask("", "{}");
+    check_problem(&a, 404, "not-found");
+    cJSON_Delete(a.body);
+    assert_true(ljgap_handler_has("adhesion"));
+    assert_true(ljgap_handler_has("sweep"));
+    assert_false(ljgap_handler_has("contact"));
+    assert_false(ljgap_handler_has(NULL));
+}
+
+static void time_cap(void **state)
+{
+    ljgap_limits l;
+    ljgap_limits_default(&l);
+    l.max_seconds = 1e-12;
+    ljgap_handler_set_limits(&l);
+    answer a = ask("adhesion", "{'psd':" PSD "}");
+    ljgap_limits_default(&l);
+    ljgap_handler_set_limits(&l);
+    check_problem(&a, 422, "cap-exceeded");
+    assert_non_null(strstr(str(a.body, "detail"), "max_seconds"));
+    cJSON_Delete(a.body);
+}
+
+static void cancelled(void **state)
+{
+    static volatile int stop = 1;
+    ljgap_limits l;
+    ljgap_limits_default(&l);
+    l.cancel = &stop;
+    ljgap_handler_set_limits(&l);
+    answer a = ask("traction", "{'psd':" PSD ",'g_ave':[1.2,2]}");
+    ljgap_limits_default(&l);
+    ljgap_handler_set_limits(&l);
+    check_problem(&a, 503, "unavailable");
+    cJSON_Delete(a.body);
+}
+
+static void outside_model(void **state)
+{
+    /* valid field by field, but the variance overflows: the core refuses the PSD */
+    answer a = ask("adhesion", "{'psd':{'kind':'power','D':2.01,'k1':1,'k2':1e300,'C':1e308}}");
+    const cJSON *errs = check_problem(&a, 422, "outside-model");
+    assert_string_equal(str(cJSON_GetArrayItem(errs, 0), "pointer"), "/psd");
+    cJSON_Delete(a.body);
+}
+
+/* cJSON allocator that fails the n-th allocation from now. */
+static long alloc_left = -1;
+static void *failing_malloc(size_t n)
+{
+    if (alloc_left == 0) return NULL;
+    if (alloc_left > 0) alloc_left--;
+    return malloc(n);
+}
+
+static void out_of_memory(void **state)
+{
+    const char *req = "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":2,\"m0\":1e-4},"
+                      "\"tol\":1e-3}";
+    cJSON_Hooks hooks = {failing_malloc, free};
+    int saw_oom = 0, saw_ok = 0;
+    for (long n = 0; n < 400 && !saw_ok; n++) {
+        ljgap_reply r;
+        alloc_left = n;
+        cJSON_InitHooks(&hooks);
+        ljgap_handle("adhesion", req, strlen(req), &r);
+        cJSON_InitHooks(NULL);
+        alloc_left = -1;
+        assert_non_null(r.body);
+        if (r.status == 500) {
+            cJSON *p = cJSON_Parse(r.body);
+            assert_non_null(p);
+            assert_string_equal(str(p, "type"), "https://ljgap.example/problems/out-of-memory");
+            assert_string_equal(r.content_type, "application/problem+json");
+            cJSON_Delete(p);
+            saw_oom = 1;
+        } else {
+            assert_int_equal(r.status, 200);
+            saw_ok = 1;
+        }
+        ljgap_reply_free(&r);
+    }
+    assert_true(saw_oom);
+    assert_true(saw_ok);
+}
+
+/* ---- success paths ---- */
+
+/* Every number anywhere in v is finite (cJSON prints NaN/Inf as null, so also: the answer
+ * has no null except where allowed). */
+static void all_finite(const cJSON *v)
+{
+    const cJSON *c;
+    if (cJSON_IsNumber(v)) assert_true(isfinite(v->valuedouble));
+    cJSON_ArrayForEach(c, v) all_finite(c);
+}
+
+static void check_meta(const answer *a, const char *method)
+{
+    const cJSON *m = get(a->body, "meta");
+    assert_int_equal(a->status, 200);
+    assert_string_equal(a->ctype, "application/json");
+    assert_string_equal(str(m, "method"), method);
+    assert_string_equal(str(m, "version"), LJGAP_VERSION);
+    assert_true(num(m, "elapsed_ms") >= 0);
+    assert_true(cJSON_IsArray(get(m, "warnings")));
+    assert_true(cJSON_IsFalse(get(m, "cached")));
+    all_finite(a->body);
+}
+
+static const char *const summary_fields[] = {"g_eq", "sigma_max", "g_at_max", "dgamma_eff"};
+
+static void check_summary(const cJSON *s, const cJSON *err)
+{
+    for (int i = 0; i < 4; i++) {
+        num(s, summary_fields[i]);
+        assert_true(num(err, summary_fields[i]) >= 0);
+    }
+    assert_true(num(s, "m0") > 0);
+    assert_true(fabs(num(s, "k0") - 0.46978) < 1e-5);
+}
+
+static void near(double got, double want, double tol, const char *what)
+{
+    if (!(fabs(got - want) <= tol))
+        fail_msg("%s: got %.17g, want %.17g within %.3g", what, got, want, tol);
+}
+
+static void adhesion_smooth_limit(void **state)
+{
+    /* m0 -> 0: the flat Lennard-Jones law, sigma_max = 1 at 3^(1/6), dgamma_eff = 1 */
+    answer a = ask("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'k2':8,'m0':1e-8}}");
+    check_meta(&a, "pde");
+    check_summary(a.body, get(a.body, "error"));
+    near(num(a.body, "sigma_max"), 1, 1e-3, "sigma_max");
+    near(num(a.body, "g_at_max"), pow(3, 1.0 / 6), 1e-2, "g_at_max");
+    near(num(a.body, "dgamma_eff"), 1, 1e-3, "dgamma_eff");
+    near(num(a.body, "m0"), 1e-8, 1e-20, "m0");
+    cJSON_Delete(a.body);
+}
+
+static void adhesion_fig4(void **state)
+{
+    /* theory.md §4: C = 1/(4π), k1 = 1, k2 = ∞, D = 2.5. This checks the wiring (C sets the
+     * level, fields land under their names); the core's own tests hold it to 1e-5. */
+    char req[200];
+    snprintf(req, sizeof req, "{'psd':{'kind':'power','D':2.5,'k1':1,'C':%.17g}}", 1 / (4 * M_PI));
+    answer a = ask("adhesion", req);
+    const cJSON *err = get(a.body, "error");
+    check_meta(&a, "pde");
+    check_summary(a.body, err);
+    near(num(a.body, "m0"), 0.5, 1e-12, "m0");
+    near(num(a.body, "g_eq"), 2.6028, 1e-4 + num(err, "g_eq"), "g_eq");
+    near(num(a.body, "sigma_max"), 0.10126, 1e-4 + num(err, "sigma_max"), "sigma_max");
+    near(num(a.body, "dgamma_eff"), 0.20147, 1e-4 + num(err, "dgamma_eff"), "dgamma_eff");
+    cJSON_Delete(a.body);
+}
+
+static void traction_matches_adhesion(void **state)
+{
+    answer t = ask("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':4,'n':7}}");
+    answer a = ask("adhesion", "{'psd':" PSD "}");
+    const cJSON *g, *sig, *err;
+    check_meta(&t, "pde");
+    g = get(t.body, "g_ave");
+    sig = get(t.body, "sigma");
+    err = get(t.body, "error");
+    assert_int_equal(cJSON_GetArraySize(g), 7);
+    assert_int_equal(cJSON_GetArraySize(sig), 7);
+    assert_int_equal(cJSON_GetArraySize(get(err, "sigma")), 7);
+    near(cJSON_GetArrayItem(g, 0)->valuedouble, 1, 0, "g_ave[0]");
+    near(cJSON_GetArrayItem(g, 6)->valuedouble, 4, 1e-15, "g_ave[6]");
+    near(cJSON_GetArrayItem(g, 2)->valuedouble, 2, 1e-15, "g_ave[2]");
+    check_summary(get(t.body, "summary"), get(err, "summary"));
+    for (int i = 0; i < 4; i++) {
+        const char *f = summary_fields[i];
+        near(num(get(t.body, "summary"), f), num(a.body, f),
+             10 * (num(get(err, "summary"), f) + num(get(a.body, "error"), f)) + 1e-9, f);
+    }
+    /* compressive near the wall, tensile beyond g_eq */
+    assert_true(cJSON_GetArrayItem(sig, 0)->valuedouble < 0);
+    assert_true(cJSON_GetArrayItem(sig, 6)->valuedouble > 0);
+    cJSON_Delete(t.body);
+    cJSON_Delete(a.body);
+}
+
+static void pdf_invariants(void **state)
+{
+    answer a = ask("pdf", "{'psd':" PSD_INF ",'g_ave':1.5,'k2':[5,null],'tol':1e-4}");
+    const cJSON *pdfs, *errs, *p;
+    int i = 0;
+    check_meta(&a, "pde");
+    pdfs = get(a.body, "pdfs");
+    errs = get(get(a.body, "error"), "pdfs");
+    assert_int_equal(cJSON_GetArraySize(pdfs), 2);
+    assert_int_equal(cJSON_GetArraySize(errs), 2);
+    near(num(cJSON_GetArrayItem(pdfs, 0), "k2"), 5, 0, "k2[0]");
+    assert_true(cJSON_IsNull(get(cJSON_GetArrayItem(pdfs, 1), "k2")));
+    cJSON_ArrayForEach(p, pdfs)
+    {
+        const cJSON *e = cJSON_GetArrayItem(errs, i++);
+        int n = cJSON_GetArraySize(get(p, "g"));
+        assert_true(n >= 2);
+        assert_int_equal(cJSON_GetArraySize(get(p, "phi")), n);
+        near(num(p, "mass"), 1, 1e-3, "mass");
+        near(num(p, "mean"), 1.5, 1e-3, "mean");
+        num(p, "sigma");
+        assert_true(num(e, "phi_l1") >= 0);
+        assert_true(num(e, "sigma") >= 0);
+    }
+    cJSON_Delete(a.body);
+}
+
+static void sweep_replaces_level(void **state)
+{
+    answer a = ask("sweep", "{'psd':{'kind':'power','D':2.5,'k1':1,'k2':8,'C':0.01},"
+                            "'vary':'m0','values':[0.1,0.5]}");
+    answer b = ask("adhesion", "{'psd':" PSD "}");
+    const cJSON *res;
+    check_meta(&a, "pde");
+    assert_string_equal(str(a.body, "vary"), "m0");
+    assert_int_equal(cJSON_GetArraySize(get(a.body, "values")), 2);
+    res = get(a.body, "results");
+    assert_int_equal(cJSON_GetArraySize(res), 2);
+    for (int i = 0; i < 2; i++)
+        check_summary(cJSON_GetArrayItem(res, i), get(cJSON_GetArrayItem(res, i), "error"));
+    near(num(cJSON_GetArrayItem(res, 0), "m0"), 0.1, 1e-12, "m0[0]");
+    /* values[1] is the PSD of b */
+    near(num(cJSON_GetArrayItem(res, 1), "g_eq"), num(b.body, "g_eq"), 1e-9, "g_eq");
+    /* rougher is less sticky */
+    assert_true(num(cJSON_GetArrayItem(res, 1), "dgamma_eff") <
+                num(cJSON_GetArrayItem(res, 0), "dgamma_eff"));
+    cJSON_Delete(a.body);
+    cJSON_Delete(b.body);
+}
+
+static void sweep_k1_keeps_level(void **state)
+{
+    answer a = ask("sweep", "{'psd':" PSD ",'vary':'k1','values':[1,2]}");
+    const cJSON *res = get(a.body, "results");
+    check_meta(&a, "pde");
+    /* the level field m0 is kept: every result has m0 = 0.5 */
+    near(num(cJSON_GetArrayItem(res, 0), "m0"), 0.5, 1e-12, "m0[0]");
+    near(num(cJSON_GetArrayItem(res, 1), "m0"), 0.5, 1e-12, "m0[1]");
+    cJSON_Delete(a.body);
+}
+
+static void ignored_field_warns(void **state)
+{
+    answer a = ask("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'k2':2,'m0':1e-4},"
+                               "'seed':7,'tol':1e-3}");
+    const cJSON *w = get(get(a.body, "meta"), "warnings");
+    check_meta(&a, "pde");
+    assert_true(cJSON_GetArraySize(w) >= 1);
+    assert_non_null(strstr(cJSON_GetArrayItem(w, 0)->valuestring, "seed"));
+    cJSON_Delete(a.body);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(k1_at_or_below_k0),
+        cmocka_unit_test(k1_message_explains_k0),
+        cmocka_unit_test(table_k0_below_k0),
+        cmocka_unit_test(D_outside),
+        cmocka_unit_test(H_outside),
+        cmocka_unit_test(D_and_H),
+        cmocka_unit_test(D_missing),
+        cmocka_unit_test(k2_not_above_k1),
+        cmocka_unit_test(non_finite_number),
+        cmocka_unit_test(non_positive_number),
+        cmocka_unit_test(wrong_type),
+        cmocka_unit_test(missing_psd),
+        cmocka_unit_test(missing_k1),
+        cmocka_unit_test(missing_kind),
+        cmocka_unit_test(two_level_fields),
+        cmocka_unit_test(no_level_field),
+        cmocka_unit_test(unknown_kind),
+        cmocka_unit_test(table_unsorted),
+        cmocka_unit_test(table_non_positive),
+        cmocka_unit_test(table_length_mismatch),
+        cmocka_unit_test(table_too_short),
+        cmocka_unit_test(table_too_long),
+        cmocka_unit_test(tail_exponent),
+        cmocka_unit_test(unknown_psd_field),
+        cmocka_unit_test(unknown_method),
+        cmocka_unit_test(tol_outside),
+        cmocka_unit_test(vmax_outside),
+        cmocka_unit_test(samples_bad),
+        cmocka_unit_test(seed_bad),
+        cmocka_unit_test(unknown_top_field),
+        cmocka_unit_test(unknown_field_pointer_escaped),
+        cmocka_unit_test(duplicate_field),
+        cmocka_unit_test(body_not_object),
+        cmocka_unit_test(traction_g_ave_missing),
+        cmocka_unit_test(traction_range_n),
+        cmocka_unit_test(traction_range_order),
+        cmocka_unit_test(traction_range_unknown),
+        cmocka_unit_test(traction_array_bad),
+        cmocka_unit_test(pdf_null_needs_infinite_support),
+        cmocka_unit_test(pdf_k2_not_above_k1),
+        cmocka_unit_test(pdf_g_ave_bad),
+        cmocka_unit_test(pdf_grid_bad),
+        cmocka_unit_test(sweep_needs_power_law),
+        cmocka_unit_test(sweep_vary_unknown),
+        cmocka_unit_test(sweep_values_bad),
+        cmocka_unit_test(sweep_too_many_values),
+        cmocka_unit_test(all_errors_collected),
+        cmocka_unit_test(errors_capped),
+        cmocka_unit_test(malformed_json),
+        cmocka_unit_test(body_not_nul_terminated),
+        cmocka_unit_test(unknown_endpoint),
+        cmocka_unit_test(time_cap),
+        cmocka_unit_test(cancelled),
+        cmocka_unit_test(outside_model),
+        cmocka_unit_test(out_of_memory),
+        cmocka_unit_test(adhesion_smooth_limit),
+        cmocka_unit_test(adhesion_fig4),
+        cmocka_unit_test(traction_matches_adhesion),
+        cmocka_unit_test(pdf_invariants),
+        cmocka_unit_test(sweep_replaces_level),
+        cmocka_unit_test(sweep_k1_keeps_level),
+        cmocka_unit_test(ignored_field_warns),
+    };
+    gsl_set_error_handler_off();
+    return cmocka_run_group_tests_name("handler", tests, NULL, NULL);
+}
