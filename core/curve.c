@@ -102,7 +102,8 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
     size_t s0 = j >= 4 ? j - 4 : 0;
     size_t m = n - s0;
     int st = LJGAP_EFAIL;
-    spline_fn S = {gsl_spline_alloc(gsl_interp_cspline, m), gsl_interp_accel_alloc(), 0};
+    spline_fn S = {gsl_spline_alloc(gsl_interp_cspline, m), gsl_interp_accel_alloc(), 0, NULL,
+                   NULL};
     if (!S.sp || !S.acc || gsl_spline_init(S.sp, g + s0, u + s0, m) != GSL_SUCCESS) goto end;
 
     double geq = u[j] == 0 ? g[j] : brent_root(&S, g[j], g[j + 1]);
