@@ -1,8 +1,8 @@
 /* test_handler.c -- the request handler against shared/docs/api.md.
  *
- * One test per validation rule: each sends a request that is valid except for one thing and
- * asserts a 422 validation problem whose errors[] holds exactly one entry, at the expected
- * JSON pointer. Then the other problem statuses (400, 404, cap, cancel, out of memory, by
+ * One test per validation rule (the rules[] table; each row runs as its own cmocka test):
+ * each sends a request that is valid except for one thing and asserts a 422 validation
+ * problem whose errors[] holds exactly one entry, at the expected JSON pointer. Then the other problem statuses (400, 404, cap, cancel, out of memory, by
  * failing cJSON's allocator at every allocation in turn), and the success paths of each
  * endpoint, checked against invariants (mass, mean, m0 -> 0 limits) and theory.md §4.
  *
@@ -105,142 +105,128 @@ static void expect_pointer(const char *endpoint, const char *request, const char
     cJSON_Delete(a.body);
 }
 
-/* ---- the psd object ---- */
+/* ---- one rule, one test: a request valid but for one field ---- */
 
-static void k1_at_or_below_k0(void **state)
+typedef struct {
+    const char *name;     /* test name */
+    const char *endpoint; /* where it is sent */
+    const char *request;  /* ' for " */
+    const char *pointer;  /* the one error expected */
+} rule;
+
+#define POWER(fields) "{'psd':{'kind':'power'," fields "}}"
+#define TABLE(fields) "{'psd':{'kind':'table'," fields "}}"
+#define WITH(fields) "{'psd':" PSD "," fields "}"
+#define WITH_INF(fields) "{'psd':" PSD_INF "," fields "}"
+
+static const rule rules[] = {
+    /* the psd object */
+    {"k1_below_k0", "adhesion", POWER("'D':2.5,'k1':0.4,'k2':8,'m0':0.5"), "/psd/k1"},
+    {"k1_is_k0", "adhesion", POWER("'D':2.5,'k1':0.4697841169402636,'m0':0.5"), "/psd/k1"},
+    {"table_k_below_k0", "adhesion", TABLE("'k':[0.4,2,3],'P':[1,1,1]"), "/psd/k/0"},
+    {"D_is_3", "adhesion", POWER("'D':3,'k1':1,'k2':8,'m0':0.5"), "/psd/D"},
+    {"D_is_2", "adhesion", POWER("'D':2,'k1':1,'k2':8,'m0':0.5"), "/psd/D"},
+    {"H_outside", "adhesion", POWER("'H':1.2,'k1':1,'m0':0.5"), "/psd/H"},
+    {"D_and_H", "adhesion", POWER("'D':2.5,'H':0.5,'k1':1,'m0':0.5"), "/psd/H"},
+    {"D_missing", "adhesion", POWER("'k1':1,'m0':0.5"), "/psd/D"},
+    {"k2_not_above_k1", "adhesion", POWER("'D':2.5,'k1':2,'k2':2,'m0':0.5"), "/psd/k2"},
+    {"non_finite_number", "adhesion", POWER("'D':2.5,'k1':1,'m0':1e999"), "/psd/m0"},
+    {"zero_C", "adhesion", POWER("'D':2.5,'k1':1,'C':0"), "/psd/C"},
+    {"negative_h_rms", "adhesion", POWER("'D':2.5,'k1':1,'h_rms':-1"), "/psd/h_rms"},
+    {"D_is_string", "adhesion", POWER("'D':'2.5','k1':1,'m0':0.5"), "/psd/D"},
+    {"psd_is_array", "adhesion", "{'psd':[1]}", "/psd"},
+    {"missing_psd", "adhesion", "{}", "/psd"},
+    {"missing_k1", "adhesion", POWER("'D':2.5,'m0':0.5"), "/psd/k1"},
+    {"missing_kind", "adhesion", "{'psd':{'D':2.5,'k1':1,'m0':0.5}}", "/psd/kind"},
+    {"two_level_fields", "adhesion", POWER("'D':2.5,'k1':1,'m0':0.5,'h_rms':0.7"), "/psd/h_rms"},
+    {"no_level_field", "adhesion", POWER("'D':2.5,'k1':1"), "/psd"},
+    {"unknown_kind", "adhesion", "{'psd':{'kind':'fractal','D':2.5,'k1':1,'m0':0.5}}", "/psd/kind"},
+    {"table_unsorted", "adhesion", TABLE("'k':[1,2,2,3],'P':[1,1,1,1]"), "/psd/k/2"},
+    {"table_non_positive", "adhesion", TABLE("'k':[1,2,3,4],'P':[1,1,1,0]"), "/psd/P/3"},
+    {"table_length_mismatch", "adhesion", TABLE("'k':[1,2,3],'P':[1,1]"), "/psd/P"},
+    {"table_too_short", "adhesion", TABLE("'k':[1],'P':[1,1]"), "/psd/k"},
+    {"tail_exponent", "adhesion", TABLE("'k':[1,2],'P':[1,1],'tail':{'exponent':-2}"),
+     "/psd/tail/exponent"},
+    {"unknown_psd_field", "adhesion", POWER("'D':2.5,'k1':1,'m0':0.5,'m_0':1"), "/psd/m_0"},
+    /* common fields */
+    {"unknown_method", "adhesion", WITH("'method':'fem'"), "/method"},
+    {"method_not_string", "adhesion", WITH("'method':3"), "/method"},
+    {"tol_zero", "adhesion", WITH("'tol':0"), "/tol"},
+    {"tol_too_large", "adhesion", WITH("'tol':0.2"), "/tol"},
+    {"tol_boolean", "adhesion", WITH("'tol':true"), "/tol"},
+    {"vmax_outside", "adhesion", WITH("'method':'paper','vmax':1.5"), "/vmax"},
+    {"samples_too_few", "adhesion", WITH("'method':'montecarlo','samples':99"), "/samples"},
+    {"samples_fraction", "adhesion", WITH("'method':'montecarlo','samples':1000.5"), "/samples"},
+    {"samples_over_cap", "adhesion", WITH("'method':'montecarlo','samples':2e6"), "/samples"},
+    {"seed_negative", "adhesion", WITH("'method':'montecarlo','seed':-1"), "/seed"},
+    {"seed_fraction", "adhesion", WITH("'method':'montecarlo','seed':0.5"), "/seed"},
+    {"unknown_top_field", "adhesion", WITH("'tolerance':1e-3"), "/tolerance"},
+    {"other_endpoints_field", "adhesion", WITH("'g_ave':[1]"), "/g_ave"},
+    {"unknown_field_escaped", "adhesion", WITH("'a/b~c':1"), "/a~1b~0c"},
+    {"duplicate_field", "adhesion", WITH("'tol':1e-3,'tol':1e-4"), "/tol"},
+    {"body_array", "adhesion", "[1,2]", ""},
+    {"body_number", "adhesion", "42", ""},
+    /* traction */
+    {"traction_g_ave_missing", "traction", "{'psd':" PSD "}", "/g_ave"},
+    {"traction_range_n_1", "traction", WITH("'g_ave':{'min':1,'max':3,'n':1}"), "/g_ave/n"},
+    {"traction_range_n_fraction", "traction", WITH("'g_ave':{'min':1,'max':3,'n':2.5}"),
+     "/g_ave/n"},
+    {"traction_range_order", "traction", WITH("'g_ave':{'min':3,'max':1,'n':5}"), "/g_ave/max"},
+    {"traction_range_unknown", "traction", WITH("'g_ave':{'min':1,'max':3,'n':5,'step':1}"),
+     "/g_ave/step"},
+    {"traction_array_negative", "traction", WITH("'g_ave':[1,-2,3]"), "/g_ave/1"},
+    {"traction_array_empty", "traction", WITH("'g_ave':[]"), "/g_ave"},
+    {"traction_g_ave_string", "traction", WITH("'g_ave':'1'"), "/g_ave"},
+    /* pdf */
+    {"pdf_null_needs_infinite_support", "pdf", WITH("'g_ave':1,'k2':[null]"), "/k2/0"},
+    {"pdf_k2_not_above_k1", "pdf", WITH_INF("'g_ave':1,'k2':[5,1]"), "/k2/1"},
+    {"pdf_g_ave_array", "pdf", WITH_INF("'g_ave':[1],'k2':[5]"), "/g_ave"},
+    {"pdf_grid_min", "pdf", WITH_INF("'g_ave':1,'k2':[5],'grid':{'min':0,'max':2,'n':9}"),
+     "/grid/min"},
+    /* sweep */
+    {"sweep_needs_power_law", "sweep",
+     "{'psd':{'kind':'table','k':[1,2],'P':[1,1]},'vary':'m0','values':[0.1]}", "/psd/kind"},
+    {"sweep_vary_unknown", "sweep", WITH("'vary':'k2','values':[3]"), "/vary"},
+    {"sweep_D_outside", "sweep", WITH("'vary':'D','values':[2.2,2.5,3.1]"), "/values/2"},
+    {"sweep_k1_below_k0", "sweep", WITH("'vary':'k1','values':[2,0.3]"), "/values/1"},
+    {"sweep_m0_zero", "sweep", WITH("'vary':'m0','values':[0.1,0]"), "/values/1"},
+    {"sweep_values_empty", "sweep", WITH("'vary':'m0','values':[]"), "/values"},
+};
+
+static void rule_test(void **state)
 {
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':0.4,'k2':8,'m0':0.5}}",
-                   "/psd/k1");
-    /* the exact k0 is outside too */
-    char req[200];
-    snprintf(req, sizeof req, "{'psd':{'kind':'power','D':2.5,'k1':%.17g,'m0':0.5}}", ljgap_k0());
-    expect_pointer("adhesion", req, "/psd/k1");
+    const rule *r = *state;
+    expect_pointer(r->endpoint, r->request, r->pointer);
 }
 
 static void k1_message_explains_k0(void **state)
 {
-    answer a = ask("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':0.3,'m0':0.5}}");
+    answer a = ask("adhesion", POWER("'D':2.5,'k1':0.3,'m0':0.5"));
     const cJSON *e = cJSON_GetArrayItem(check_problem(&a, 422, "validation"), 0);
     assert_non_null(strstr(str(e, "detail"), "0.46978"));
     assert_non_null(strstr(str(e, "detail"), "(19)"));
     cJSON_Delete(a.body);
 }
 
-static void table_k0_below_k0(void **state)
+/* A table request of n points k = 1..n, every P = p; malloc'd. */
+static char *big_table(size_t n, int p)
 {
-    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[0.4,2,3],'P':[1,1,1]}}", "/psd/k/0");
-}
-
-static void D_outside(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':3,'k1':1,'k2':8,'m0':0.5}}", "/psd/D");
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2,'k1':1,'k2':8,'m0':0.5}}", "/psd/D");
-}
-
-static void H_outside(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','H':1.2,'k1':1,'m0':0.5}}", "/psd/H");
-}
-
-static void D_and_H(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'H':0.5,'k1':1,'m0':0.5}}",
-                   "/psd/H");
-}
-
-static void D_missing(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','k1':1,'m0':0.5}}", "/psd/D");
-}
-
-static void k2_not_above_k1(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':2,'k2':2,'m0':0.5}}",
-                   "/psd/k2");
-}
-
-static void non_finite_number(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':1e999}}", "/psd/m0");
-}
-
-static void non_positive_number(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'C':0}}", "/psd/C");
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'h_rms':-1}}", "/psd/h_rms");
-}
-
-static void wrong_type(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':'2.5','k1':1,'m0':0.5}}", "/psd/D");
-    expect_pointer("adhesion", "{'psd':" PSD ",'tol':true}", "/tol");
-    expect_pointer("adhesion", "{'psd':[1]}", "/psd");
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':3}", "/method");
-}
-
-static void missing_psd(void **state)
-{
-    expect_pointer("adhesion", "{}", "/psd");
-}
-
-static void missing_k1(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'m0':0.5}}", "/psd/k1");
-}
-
-static void missing_kind(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'D':2.5,'k1':1,'m0':0.5}}", "/psd/kind");
-}
-
-static void two_level_fields(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':0.5,'h_rms':0.7}}",
-                   "/psd/h_rms");
-}
-
-static void no_level_field(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1}}", "/psd");
-}
-
-static void unknown_kind(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'fractal','D':2.5,'k1':1,'m0':0.5}}", "/psd/kind");
-}
-
-static void table_unsorted(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,2,3],'P':[1,1,1,1]}}", "/psd/k/2");
-}
-
-static void table_non_positive(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,3,4],'P':[1,1,1,0]}}", "/psd/P/3");
-}
-
-static void table_length_mismatch(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1,2,3],'P':[1,1]}}", "/psd/P");
-}
-
-static void table_too_short(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'table','k':[1],'P':[1,1]}}", "/psd/k");
-}
-
-static void table_too_long(void **state)
-{
-    size_t n = 10001, cap = 40 * n + 100, used;
-    char *req = malloc(cap);
+    char *req = malloc(24 * n + 100);
+    size_t used;
     assert_non_null(req);
     used = (size_t)sprintf(req, "{'psd':{'kind':'table','k':[");
     for (size_t i = 0; i < n; i++)
         used += (size_t)sprintf(req + used, "%s%zu", i ? "," : "", i + 1);
     used += (size_t)sprintf(req + used, "],'P':[");
     for (size_t i = 0; i < n; i++)
-        used += (size_t)sprintf(req + used, "%s1", i ? "," : "");
+        used += (size_t)sprintf(req + used, "%s%d", i ? "," : "", p);
     sprintf(req + used, "]}}");
+    return req;
+}
+
+static void table_too_long(void **state)
+{
+    char *req = big_table(10001, 1);
     answer a = ask("adhesion", req);
     const cJSON *errs = check_problem(&a, 422, "validation");
     assert_int_equal(cJSON_GetArraySize(errs), 2);
@@ -250,157 +236,13 @@ static void table_too_long(void **state)
     free(req);
 }
 
-static void tail_exponent(void **state)
-{
-    expect_pointer("adhesion",
-                   "{'psd':{'kind':'table','k':[1,2],'P':[1,1],'tail':{'exponent':-2}}}",
-                   "/psd/tail/exponent");
-}
-
-static void unknown_psd_field(void **state)
-{
-    expect_pointer("adhesion", "{'psd':{'kind':'power','D':2.5,'k1':1,'m0':0.5,'m_0':1}}",
-                   "/psd/m_0");
-}
-
-/* ---- common fields ---- */
-
-static void unknown_method(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'fem'}", "/method");
-}
-
-static void tol_outside(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'tol':0}", "/tol");
-    expect_pointer("adhesion", "{'psd':" PSD ",'tol':0.2}", "/tol");
-}
-
-static void vmax_outside(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'paper','vmax':1.5}", "/vmax");
-}
-
-static void samples_bad(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':99}", "/samples");
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':1000.5}",
-                   "/samples");
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','samples':2e6}", "/samples");
-}
-
-static void seed_bad(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','seed':-1}", "/seed");
-    expect_pointer("adhesion", "{'psd':" PSD ",'method':'montecarlo','seed':0.5}", "/seed");
-}
-
-static void unknown_top_field(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'tolerance':1e-3}", "/tolerance");
-    /* a field of another endpoint is unknown here */
-    expect_pointer("adhesion", "{'psd':" PSD ",'g_ave':[1]}", "/g_ave");
-}
-
-static void unknown_field_pointer_escaped(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'a/b~c':1}", "/a~1b~0c");
-}
-
-static void duplicate_field(void **state)
-{
-    expect_pointer("adhesion", "{'psd':" PSD ",'tol':1e-3,'tol':1e-4}", "/tol");
-}
-
-static void body_not_object(void **state)
-{
-    expect_pointer("adhesion", "[1,2]", "");
-    expect_pointer("adhesion", "42", "");
-}
-
-/* ---- traction ---- */
-
-static void traction_g_ave_missing(void **state)
-{
-    expect_pointer("traction", "{'psd':" PSD "}", "/g_ave");
-}
-
-static void traction_range_n(void **state)
-{
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':1}}", "/g_ave/n");
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':2.5}}", "/g_ave/n");
-}
-
-static void traction_range_order(void **state)
-{
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':3,'max':1,'n':5}}", "/g_ave/max");
-}
-
-static void traction_range_unknown(void **state)
-{
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':{'min':1,'max':3,'n':5,'step':1}}",
-                   "/g_ave/step");
-}
-
-static void traction_array_bad(void **state)
-{
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':[1,-2,3]}", "/g_ave/1");
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':[]}", "/g_ave");
-    expect_pointer("traction", "{'psd':" PSD ",'g_ave':'1'}", "/g_ave");
-}
-
-/* ---- pdf ---- */
-
-static void pdf_null_needs_infinite_support(void **state)
-{
-    expect_pointer("pdf", "{'psd':" PSD ",'g_ave':1,'k2':[null]}", "/k2/0");
-}
-
-static void pdf_k2_not_above_k1(void **state)
-{
-    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':1,'k2':[5,1]}", "/k2/1");
-}
-
-static void pdf_g_ave_bad(void **state)
-{
-    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':[1],'k2':[5]}", "/g_ave");
-}
-
-static void pdf_grid_bad(void **state)
-{
-    expect_pointer("pdf", "{'psd':" PSD_INF ",'g_ave':1,'k2':[5],'grid':{'min':0,'max':2,'n':9}}",
-                   "/grid/min");
-}
-
-/* ---- sweep ---- */
-
-static void sweep_needs_power_law(void **state)
-{
-    expect_pointer("sweep",
-                   "{'psd':{'kind':'table','k':[1,2],'P':[1,1]},'vary':'m0','values':[0.1]}",
-                   "/psd/kind");
-}
-
-static void sweep_vary_unknown(void **state)
-{
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'k2','values':[3]}", "/vary");
-}
-
-static void sweep_values_bad(void **state)
-{
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'D','values':[2.2,2.5,3.1]}", "/values/2");
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'k1','values':[2,0.3]}", "/values/1");
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[0.1,0]}", "/values/1");
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[]}", "/values");
-}
-
 static void sweep_too_many_values(void **state)
 {
     ljgap_limits l;
     ljgap_limits_default(&l);
     l.max_points = 2;
     ljgap_handler_set_limits(&l);
-    expect_pointer("sweep", "{'psd':" PSD ",'vary':'m0','values':[0.1,0.2,0.3]}", "/values");
+    expect_pointer("sweep", WITH("'vary':'m0','values':[0.1,0.2,0.3]"), "/values");
     ljgap_limits_default(&l);
     ljgap_handler_set_limits(&l);
 }
@@ -425,16 +267,7 @@ static void all_errors_collected(void **state)
 
 static void errors_capped(void **state)
 {
-    size_t n = 300, used;
-    char *req = malloc(20 * n + 200);
-    assert_non_null(req);
-    used = (size_t)sprintf(req, "{'psd':{'kind':'table','k':[");
-    for (size_t i = 0; i < n; i++)
-        used += (size_t)sprintf(req + used, "%s%zu", i ? "," : "", i + 1);
-    used += (size_t)sprintf(req + used, "],'P':[");
-    for (size_t i = 0; i < n; i++)
-        used += (size_t)sprintf(req + used, "%s-1", i ? "," : "");
-    sprintf(req + used, "]}}");
+    char *req = big_table(300, -1);
     answer a = ask("adhesion", req);
     assert_int_equal(cJSON_GetArraySize(check_problem(&a, 422, "validation")), 100);
     assert_non_null(strstr(str(a.body, "detail"), "300"));
@@ -731,52 +564,9 @@ static void ignored_field_warns(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(k1_at_or_below_k0),
+    static const struct CMUnitTest others[] = {
         cmocka_unit_test(k1_message_explains_k0),
-        cmocka_unit_test(table_k0_below_k0),
-        cmocka_unit_test(D_outside),
-        cmocka_unit_test(H_outside),
-        cmocka_unit_test(D_and_H),
-        cmocka_unit_test(D_missing),
-        cmocka_unit_test(k2_not_above_k1),
-        cmocka_unit_test(non_finite_number),
-        cmocka_unit_test(non_positive_number),
-        cmocka_unit_test(wrong_type),
-        cmocka_unit_test(missing_psd),
-        cmocka_unit_test(missing_k1),
-        cmocka_unit_test(missing_kind),
-        cmocka_unit_test(two_level_fields),
-        cmocka_unit_test(no_level_field),
-        cmocka_unit_test(unknown_kind),
-        cmocka_unit_test(table_unsorted),
-        cmocka_unit_test(table_non_positive),
-        cmocka_unit_test(table_length_mismatch),
-        cmocka_unit_test(table_too_short),
         cmocka_unit_test(table_too_long),
-        cmocka_unit_test(tail_exponent),
-        cmocka_unit_test(unknown_psd_field),
-        cmocka_unit_test(unknown_method),
-        cmocka_unit_test(tol_outside),
-        cmocka_unit_test(vmax_outside),
-        cmocka_unit_test(samples_bad),
-        cmocka_unit_test(seed_bad),
-        cmocka_unit_test(unknown_top_field),
-        cmocka_unit_test(unknown_field_pointer_escaped),
-        cmocka_unit_test(duplicate_field),
-        cmocka_unit_test(body_not_object),
-        cmocka_unit_test(traction_g_ave_missing),
-        cmocka_unit_test(traction_range_n),
-        cmocka_unit_test(traction_range_order),
-        cmocka_unit_test(traction_range_unknown),
-        cmocka_unit_test(traction_array_bad),
-        cmocka_unit_test(pdf_null_needs_infinite_support),
-        cmocka_unit_test(pdf_k2_not_above_k1),
-        cmocka_unit_test(pdf_g_ave_bad),
-        cmocka_unit_test(pdf_grid_bad),
-        cmocka_unit_test(sweep_needs_power_law),
-        cmocka_unit_test(sweep_vary_unknown),
-        cmocka_unit_test(sweep_values_bad),
         cmocka_unit_test(sweep_too_many_values),
         cmocka_unit_test(all_errors_collected),
         cmocka_unit_test(errors_capped),
@@ -795,6 +585,12 @@ int main(void)
         cmocka_unit_test(sweep_k1_keeps_level),
         cmocka_unit_test(ignored_field_warns),
     };
+    enum { NR = sizeof rules / sizeof rules[0], NO = sizeof others / sizeof others[0] };
+    struct CMUnitTest tests[NR + NO];
+    for (size_t i = 0; i < NR; i++)
+        tests[i] = (struct CMUnitTest){
+            .name = rules[i].name, .test_func = rule_test, .initial_state = (void *)&rules[i]};
+    memcpy(tests + NR, others, sizeof others);
     gsl_set_error_handler_off();
-    return cmocka_run_group_tests_name("handler", tests, NULL, NULL);
+    return _cmocka_run_group_tests("handler", tests, NR + NO, NULL, NULL);
 }
