@@ -2,11 +2,12 @@
  *
  * One test per validation rule (the rules[] table; each row runs as its own cmocka test):
  * each sends a request that is valid except for one thing and asserts a 422 validation
- * problem whose errors[] holds exactly one entry, at the expected JSON pointer. Then the other problem statuses (400, 404, cap, cancel, out of memory, by
- * failing cJSON's allocator at every allocation in turn), and the success paths of each
- * endpoint, checked against invariants (mass, mean, m0 -> 0 limits) and theory.md §4.
+ * problem whose errors[] holds exactly one entry, at the expected JSON pointer. Then the
+ * other problem statuses (400, 404, cap, cancel, out of memory, by failing cJSON's allocator
+ * at every allocation in turn), and the success paths of each endpoint, checked against
+ * invariants (mass, mean, m0 -> 0 limits) and theory.md §4.
  *
- * Requests are written with ' for " to keep them readable; req() swaps them.
+ * Requests are written with ' for " to keep them readable; ask() swaps them.
  */
 #include <setjmp.h>
 #include <stdarg.h>
