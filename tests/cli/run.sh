@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# The command line build/ljgap against shared/docs/api.md: exit status (0 for a 2xx answer,
+# 1 for a problem, 2 for usage or read errors), one line of JSON on stdout, the same answer
+# from a file as from stdin. Prints one "ok ..." or "not ok ..." line per check.
+set -u
+cd "$(dirname "$0")/../.."
+BUILD=${BUILD:-build}
+LJGAP=$BUILD/ljgap
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+n=0
+check() { # check DESCRIPTION COMMAND...: ok when the command succeeds
+    local what=$1
+    shift
+    n=$((n + 1))
+    if "$@"; then echo "ok $n - cli: $what"; else echo "not ok $n - cli: $what"; fi
+}
+
+# run NAME ARGS...: runs the CLI with stdin from $tmp/in, keeps stdout and the exit status
+run() {
+    "$LJGAP" "$@" <"$tmp/in" >"$tmp/out" 2>"$tmp/err"
+    echo $? >"$tmp/rc"
+}
+rc_is() { [ "$(cat "$tmp/rc")" = "$1" ]; }
+jq_true() { jq -e "$1" "$tmp/out" >/dev/null 2>&1; }
+one_line() { [ "$(wc -l <"$tmp/out")" = 1 ]; }
+
+if [ ! -x "$LJGAP" ]; then
+    echo "not ok 1 - cli: $LJGAP is not built"
+    exit 1
+fi
+
+psd='{"kind":"power","D":2.5,"k1":1,"k2":4,"m0":0.01}'
+
+: >"$tmp/in"
+run --version
+check "--version exits 0" rc_is 0
+check "--version prints the version" grep -q '^ljgap [0-9]' "$tmp/out"
+run --help
+check "--help exits 0" rc_is 0
+check "--help prints usage" grep -q 'usage: ljgap NAME' "$tmp/out"
+run
+check "no endpoint is a usage error (2)" rc_is 2
+run adhesion "$tmp/no-such-file"
+check "unreadable file exits 2" rc_is 2
+
+echo "{\"psd\":$psd,\"tol\":1e-4}" >"$tmp/in"
+run adhesion
+check "adhesion from stdin exits 0" rc_is 0
+check "adhesion answer is one line" one_line
+check "adhesion has the summary fields" jq_true \
+    '[.g_eq,.sigma_max,.g_at_max,.dgamma_eff,.m0,.k0] | all(type == "number")'
+check "adhesion has error estimates" jq_true '.error | [.g_eq,.sigma_max,.g_at_max,.dgamma_eff] | all(. >= 0)'
+check "adhesion meta" jq_true '.meta.method == "pde" and (.meta.version | type == "string")
+    and (.meta.elapsed_ms >= 0) and (.meta.warnings | type == "array") and .meta.cached == false'
+check "small roughness: sigma_max near 1" jq_true '.sigma_max > 0.9 and .sigma_max <= 1.000001'
+cp "$tmp/out" "$tmp/stdin.json"
+cp "$tmp/in" "$tmp/req.json"
+: >"$tmp/in"
+run adhesion "$tmp/req.json"
+check "adhesion from FILE exits 0" rc_is 0
+same_answer() {
+    jq -e --slurpfile a "$tmp/stdin.json" \
+        'del(.meta.elapsed_ms) == ($a[0] | del(.meta.elapsed_ms))' "$tmp/out" >/dev/null
+}
+check "FILE and stdin give the same answer" same_answer
+
+echo "{\"psd\":$psd,\"g_ave\":{\"min\":1,\"max\":3,\"n\":5},\"tol\":1e-4}" >"$tmp/in"
+run traction
+check "traction exits 0" rc_is 0
+check "traction has n points and errors" jq_true \
+    '(.g_ave | length) == 5 and (.sigma | length) == 5 and (.error.sigma | length) == 5'
+check "traction summary" jq_true '.summary.g_eq > 0 and .error.summary.g_eq >= 0'
+
+echo '{"psd":{"kind":"power","D":2.5,"k1":0.3,"m0":0.5},"tol":1,"bogus":1}' >"$tmp/in"
+run adhesion
+check "validation problem exits 1" rc_is 1
+check "validation problem is one line" one_line
+check "validation problem lists every bad field" jq_true \
+    '.status == 422 and ([.errors[].pointer] | sort) == ["/bogus","/psd/k1","/tol"]'
+check "problem has type, title, detail" jq_true \
+    '(.type | endswith("/validation")) and (.title | length > 0) and (.detail | length > 0)'
+
+echo '{"psd":' >"$tmp/in"
+run adhesion
+check "malformed JSON exits 1" rc_is 1
+check "malformed JSON is a 400 problem" jq_true '.status == 400 and .errors == []'
+
+echo '{}' >"$tmp/in"
+run nosuch
+check "unknown endpoint exits 1" rc_is 1
+check "unknown endpoint is a 404 problem" jq_true '.status == 404'
+
+echo "{\"psd\":$psd,\"vary\":\"m0\",\"values\":[0.01,0.02],\"tol\":1e-4}" >"$tmp/in"
+run sweep
+check "sweep exits 0" rc_is 0
+check "sweep answers one result per value" jq_true \
+    '.vary == "m0" and (.results | length) == 2 and (.results[1].m0 == 0.02)
+     and (.results[0].error.g_eq >= 0)'
