@@ -15,7 +15,7 @@
  *    the variance m0 - cumvar(kmax) is one exact heat-kernel step (f = 1);
  *  - each band moves the mass p_j of grid point j to the points within 8√V_j with weights
  *    ∝ exp(-(g_i - g_j)^2 / 2V_j) normalized to sum 1 (mass is conserved exactly; the mean
- *    too, except for what the grid ends cut off: that "leak" is measured and reported);
+ *    too, except for what the lower end cuts off: that "leak" is measured and reported;
  *    when 8√V_j < h the mass stays put. The start δ(g - g_ave) is split linearly between
  *    the two neighbouring points (mass and mean exact).
  *  - the traction curve comes from the transposed iteration u <- T^T u, u = sigma(g_i) at
@@ -173,9 +173,9 @@ fail:
     return NULL;
 }
 
-/* One band. Forward (back = 0): out = T in, ws->leak += mass cut at the ends. Transposed
+/* One band. Forward (back = 0): out = T in, ws->leak += mass cut at the lower end. Transposed
  * (back = 1): out = T^T in, and lout = c + T^T lin when lout != NULL, c_j being the weight
- * of row j cut at the ends. */
+ * of row j cut at the lower end. */
 static void band_apply(ljgap__paper_ws *ws, const ljgap_psd *psd, size_t b, const double *in,
                        double *out, int back, const double *lin, double *lout)
 {
@@ -213,14 +213,14 @@ static void band_apply(ljgap__paper_ws *ws, const ljgap_psd *psd, size_t b, cons
             S += e[m];
         for (size_t m = 1; m <= mr; m++)
             S += e[m];
-        double c = 0.0;
-        if (ml < M || mr < M) {
-            double cut = 0.0;
+        double c = 0.0; /* weight cut at the lower end (the upper end is 10√m0 away) */
+        if (ml < M) {
+            double cut = 0.0, cutr = 0.0;
             for (size_t m = ml + 1; m <= M; m++)
                 cut += e[m];
             for (size_t m = mr + 1; m <= M; m++)
-                cut += e[m];
-            c = cut / (S + cut);
+                cutr += e[m];
+            c = cut / (S + cut + cutr);
         }
         const size_t i0 = j - ml;
         if (back) {
@@ -397,21 +397,32 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
     if (!v0 || !v1 || !err) goto end;
 
     double vmax = o->vmax, impact = 0.0, tol = o->tol;
-    long work = 0;
-    /* the first level also places the lower grid end */
+    long work = 0, last = 0;
+    /* the first level also places the lower grid end: it moves down while that lowers the
+     * leak's impact (coarse Vmax sends Gaussian tails through the wall, and there a lower
+     * end only makes the impact grow) */
     for (;;) {
         long wk = 0;
-        st = trac_level(psd, o, deadline, vmax, &ts, g_ave, n, v0, &impact, &wk, w);
+        double imp1 = 0.0;
+        trac_setup t1 = ts;
+        if (impact > 0.0) t1.g_lo = fmax(PAPER_GLO_MIN, 0.6 * ts.g_lo);
+        st = trac_level(psd, o, deadline, vmax, &t1, g_ave, n, impact > 0.0 ? v1 : v0, &imp1, &wk,
+                        w);
         work += wk;
+        last = wk;
         if (st) goto end;
+        if (impact > 0.0) {
+            if (imp1 >= impact) break;
+            memcpy(v0, v1, nv * sizeof *v0);
+            ts = t1;
+        }
+        impact = imp1;
         if (impact <= 0.1 * tol || ts.g_lo <= PAPER_GLO_MIN) break;
-        ts.g_lo = fmax(PAPER_GLO_MIN, 0.6 * ts.g_lo);
     }
     if (impact > 0.1 * tol)
         ljgap_warn(w,
                    "paper: probability reaches the lower grid end g = %g (leak x |sigma| = %.3g)",
                    ts.g_lo, impact);
-    long last = work;
     for (;;) {
         double est = next_work(last, vmax);
         if ((double)work + est > (double)o->max_work) {
@@ -575,21 +586,31 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
     qsort(ks, nk2, sizeof *ks, cmp_double);
 
     double g_lo = 0.5 * fmin(1.0, g_ave), g_hi = fmax(8.0, g_ave + 10.0 * sqrt(psd->m0));
-    double vmax = o->vmax, leak = 0.0;
+    double vmax = o->vmax, impact = 0.0;
     long work = 0, last = 0;
-    for (;;) {
+    for (;;) { /* place the lower grid end as for the traction */
         long wk = 0;
-        st = pdf_run(psd, o, deadline, vmax, g_lo, g_hi, g_ave, ks, nk2, &A, &leak, &wk);
+        double leak = 0.0, g1 = impact > 0.0 ? fmax(PAPER_GLO_MIN, 0.6 * g_lo) : g_lo;
+        st = pdf_run(psd, o, deadline, vmax, g1, g_hi, g_ave, ks, nk2, &B, &leak, &wk);
         work += wk;
         last = wk;
         if (st) goto end;
-        double sl = fabs(ljgap_sigma(g_lo));
-        if (leak * fmax(1.0, sl) <= 0.1 * tol || g_lo <= PAPER_GLO_MIN) break;
+        double imp1 = leak * fmax(1.0, fabs(ljgap_sigma(g1)));
+        if (impact > 0.0 && imp1 >= impact) {
+            pdf_level_free(&B);
+            break;
+        }
         pdf_level_free(&A);
-        g_lo = fmax(PAPER_GLO_MIN, 0.6 * g_lo);
+        A = B;
+        B.p = NULL;
+        g_lo = g1;
+        impact = imp1;
+        if (impact <= 0.1 * tol || g_lo <= PAPER_GLO_MIN) break;
     }
-    if (leak * fmax(1.0, fabs(ljgap_sigma(g_lo))) > 0.1 * tol)
-        ljgap_warn(w, "paper: probability %.3g reaches the grid ends", leak);
+    if (impact > 0.1 * tol)
+        ljgap_warn(w,
+                   "paper: probability reaches the lower grid end g = %g (leak x |sigma| = %.3g)",
+                   g_lo, impact);
     for (size_t s = 0; s < nk2; s++)
         sig[s] = pdf_sigma(&A, A.p + s * A.n);
     for (;;) {
@@ -610,6 +631,7 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
             break;
         }
         long wk = 0;
+        double leak = 0.0;
         st = pdf_run(psd, o, deadline, 0.5 * vmax, g_lo, g_hi, g_ave, ks, nk2, &B, &leak, &wk);
         work += wk;
         last = wk;

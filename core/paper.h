@@ -28,7 +28,7 @@ typedef struct {
     double *e;    /* scratch, emax + 1 Gaussian weights exp(-(m h)^2 / 2V) */
     size_t emax;  /* largest window half-width in grid points */
     long work;    /* window operations (grid point x neighbour) done so far */
-    double leak;  /* forward runs: probability renormalized away at the grid ends */
+    double leak;  /* forward runs: probability renormalized away at the lower grid end */
 } ljgap__paper_ws;
 
 /* Grid [g_lo, g_hi] of spacing h and the bands from k1 to the largest snapshot ks[nks-1]
@@ -46,7 +46,7 @@ int ljgap__paper_forward(ljgap__paper_ws *ws, const ljgap_psd *psd, double *p, s
 
 /* Transposed iteration through all bands, last to first: u (n entries) holds sigma(g_i) on
  * entry and sigma_bar(g_ave = g_i) on return. leak (NULL or n entries) receives the
- * probability that a path started at g_i was renormalized at a grid end. */
+ * probability that a path started at g_i was renormalized at the lower grid end. */
 int ljgap__paper_backward(ljgap__paper_ws *ws, const ljgap_psd *psd, double *u, double *leak,
                           const ljgap_opts *o, double deadline);
 
