@@ -43,7 +43,7 @@
 #define DXI0 0.02       /* relative grid spacing at level 0 */
 #define MAX_LEVEL 7     /* at most 2^7 times the level-0 resolution */
 #define G_HI_MIN 60.0   /* upper end of the traction grid, at least */
-#define G_LO_FLOOR 0.04 /* never put the lower end below this */
+#define G_LO_FLOOR 0.04 /* never put the lower end below this (or half the lowest gap asked) */
 #define G_LO_FACTOR 0.8 /* each lowering of the lower end */
 #define TAIL_STEPS0 8   /* tau steps of the infinite tail at level 0 (per unit m0 share) */
 
@@ -597,7 +597,8 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     double S = sqrt(variance_bound(psd));
     double g_hi = fmax(G_HI_MIN, fmax(3.0 * gmax, gmax + 30.0 * S));
     g_hi = fmax(g_hi, 12.0 * sqrt(psd->m0)); /* the analytic tail needs m0/g_hi^2 <= 0.01 */
-    double g_lo = fmax(0.6 * gmin, G_LO_FLOOR / G_LO_FACTOR);
+    double lo_floor = fmin(G_LO_FLOOR, 0.5 * gmin);
+    double g_lo = fmax(0.6 * gmin, lo_floor / G_LO_FACTOR);
     int want_sum = sum != NULL;
     curve_result A = {0}, B = {0}, P = {0};
     int st;
@@ -617,7 +618,7 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
         g_lo = g2;
         trunc = d;
         if (d < 0.1 * o->tol) break;
-        if (g_lo * G_LO_FACTOR < G_LO_FLOOR) {
+        if (g_lo * G_LO_FACTOR < lo_floor) {
             ljgap_warn(w,
                        "moving the lower grid end to g = %g still changes the answer by %.2g "
                        "(relative): paths reach the wall region; the error includes this",
@@ -836,13 +837,14 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
     double S = sqrt(variance_bound(psd));
     double g_hi = g_ave + 10.0 * S;
     double g_lo = fmax(fmin(0.6, 0.6 * g_ave), g_ave - 10.0 * S);
-    g_lo = fmax(g_lo, G_LO_FLOOR);
+    double lo_floor = fmin(G_LO_FLOOR, 0.5 * g_ave);
+    g_lo = fmax(g_lo, lo_floor);
     /* lower end: lower while the snapshot tractions change at level 0 */
     st = pdf_level_run(&C, g_ave, g_lo, g_hi, cuts, nk2, 0, &A);
     if (st) goto end;
     double trunc = 0;
-    while (g_lo > G_LO_FLOOR && g_lo > g_ave - 10.0 * S) {
-        double g2 = fmax(g_lo * G_LO_FACTOR, G_LO_FLOOR);
+    while (g_lo > lo_floor && g_lo > g_ave - 10.0 * S) {
+        double g2 = fmax(g_lo * G_LO_FACTOR, lo_floor);
         st = pdf_level_run(&C, g_ave, g2, g_hi, cuts, nk2, 0, &B);
         if (st) goto end;
         double d = 0;
@@ -856,7 +858,7 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
         g_lo = g2;
         trunc = d;
         if (d < 0.1 * o->tol) break;
-        if (g_lo <= G_LO_FLOOR) {
+        if (g_lo <= lo_floor) {
             ljgap_warn(w, "probability reaches the lower grid end g = %g", g_lo);
             break;
         }
