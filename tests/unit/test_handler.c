@@ -22,6 +22,7 @@
 #include <cjson/cJSON.h>
 #include <gsl/gsl_errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -563,6 +564,51 @@ static void ignored_field_warns(void **state)
     cJSON_Delete(a.body);
 }
 
+/* ---- thread safety ---- */
+
+#define N_THREADS 4
+static const char *const mixed[] = {
+    "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":2,\"m0\":1e-3},\"tol\":1e-3}",
+    "{\"psd\":{\"kind\":\"power\",\"D\":3.5,\"k1\":0.2,\"m0\":-1},\"tol\":9}",
+    "{\"psd\":",
+};
+
+/* Each thread answers every request of mixed[] and keeps the bodies without meta. */
+static void *worker(void *arg)
+{
+    char **out = arg;
+    for (size_t i = 0; i < sizeof mixed / sizeof mixed[0]; i++) {
+        ljgap_reply r;
+        cJSON *body;
+        ljgap_handle("adhesion", mixed[i], strlen(mixed[i]), &r);
+        body = cJSON_Parse(r.body);
+        cJSON_DeleteItemFromObjectCaseSensitive(body, "meta");
+        out[i] = cJSON_PrintUnformatted(body);
+        cJSON_Delete(body);
+        ljgap_reply_free(&r);
+    }
+    return NULL;
+}
+
+static void concurrent_answers_agree(void **state)
+{
+    enum { NM = sizeof mixed / sizeof mixed[0] };
+    pthread_t t[N_THREADS];
+    char *out[N_THREADS][NM];
+    for (int i = 0; i < N_THREADS; i++)
+        assert_int_equal(pthread_create(&t[i], NULL, worker, out[i]), 0);
+    for (int i = 0; i < N_THREADS; i++)
+        assert_int_equal(pthread_join(t[i], NULL), 0);
+    for (int i = 0; i < N_THREADS; i++)
+        for (int m = 0; m < NM; m++) {
+            assert_non_null(out[i][m]);
+            assert_string_equal(out[i][m], out[0][m]);
+        }
+    for (int i = 0; i < N_THREADS; i++)
+        for (int m = 0; m < NM; m++)
+            free(out[i][m]);
+}
+
 int main(void)
 {
     static const struct CMUnitTest others[] = {
@@ -585,6 +631,7 @@ int main(void)
         cmocka_unit_test(sweep_replaces_level),
         cmocka_unit_test(sweep_k1_keeps_level),
         cmocka_unit_test(ignored_field_warns),
+        cmocka_unit_test(concurrent_answers_agree),
     };
     enum { NR = sizeof rules / sizeof rules[0], NO = sizeof others / sizeof others[0] };
     struct CMUnitTest tests[NR + NO];
