@@ -1,0 +1,322 @@
+#!/usr/bin/env bash
+# HTTP tests of build/ljgapd: start it on a free port, exercise every endpoint and every problem
+# status with curl and jq, /healthz while every compute slot is busy, the connection limit and
+# shutdown by SIGTERM. One "ok ..." / "not ok ..." line per check (summed by tests/run.sh).
+#   BUILD=build/h-http tests/http/run.sh
+#   WRAP="valgrind --leak-check=full --error-exitcode=99" tests/http/run.sh   (slow bounds relax)
+set -u
+cd "$(dirname "$0")/../.."
+BUILD=${BUILD:-build}
+BIN=$BUILD/ljgapd
+WRAP=${WRAP:-}
+SLOW=1 # multiplier for time bounds
+[ -n "$WRAP" ] && SLOW=5
+
+tmp=$(mktemp -d)
+pids=()
+cleanup() {
+    for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null; done
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+
+check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
+    local desc=$1
+    shift
+    if "$@"; then echo "ok - $desc"; else echo "not ok - $desc"; fi
+}
+
+if [ ! -x "$BIN" ]; then
+    echo "not ok - $BIN is not built"
+    exit 1
+fi
+
+# ---- a web directory with one file of each allowed kind, and some that must not be served ----
+mkdir -p "$tmp/web/vendor/deeper"
+cp web/index.html "$tmp/web/"
+echo 'console.log("app");' >"$tmp/web/app.js"
+echo 'body { margin: 0 }' >"$tmp/web/style.css"
+printf '\211PNG\r\n\032\n' >"$tmp/web/pic.png"
+echo '<svg xmlns="http://www.w3.org/2000/svg"/>' >"$tmp/web/icon.svg"
+echo '{"x":1}' >"$tmp/web/data.json"
+echo 'var lib = 1;' >"$tmp/web/vendor/lib.js"
+echo 'deep' >"$tmp/web/vendor/deeper/x.js"
+echo 'secret' >"$tmp/web/secret.txt"
+echo 'hidden' >"$tmp/web/.hidden.js"
+echo 'outside' >"$tmp/outside.js"
+
+# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID
+start() {
+    local name=$1
+    shift
+    $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
+    PID=$!
+    pids+=("$PID")
+    URL=
+    for _ in $(seq 1 $((100 * SLOW))); do
+        URL=$(sed -n '1s|^listening on \(http://127\.0\.0\.1:[0-9]*\)/$|\1|p' "$tmp/$name.out")
+        [ -n "$URL" ] && return 0
+        sleep 0.05
+    done
+    return 1
+}
+
+# req METHOD PATH [CURL ARGS...]: sets STATUS; the body is in $tmp/body, headers in $tmp/hdrs
+req() {
+    local m=$1 p=$2
+    shift 2
+    if [ "$m" = HEAD ]; then set -- -I "$@"; else set -- -X "$m" "$@"; fi
+    STATUS=$(curl -s --max-time $((30 * SLOW)) -o "$tmp/body" -D "$tmp/hdrs" -w '%{http_code}' \
+        "$@" "$URL$p")
+}
+hdr() { # the value of header $1 of the last answer
+    grep -i "^$1:" "$tmp/hdrs" | head -n 1 | cut -d: -f2- | tr -d '\r' | sed 's/^ *//'
+}
+json() { # json ARGS... : jq -e over the last body
+    jq -e "$@" "$tmp/body" >/dev/null 2>&1
+}
+post() { # post ENDPOINT BODY: POST JSON to /v1/ENDPOINT
+    req POST "/v1/$1" -H 'Content-Type: application/json' --data-binary "$2"
+}
+problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
+    [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
+        json --argjson s "$1" '.status == $s and (.type | type == "string") and
+            (.title | type == "string") and (.detail | type == "string")'
+}
+elapsed() { # elapsed T0: seconds since T0 (from date +%s.%N)
+    awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN { printf "%.3f", b - a }'
+}
+lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a < b) }'; }
+
+PSD='"psd":{"kind":"power","D":2.5,"k1":1,"k2":8,"C":0.0796}'
+# ~20 s of work (stopped by the max_seconds cap): keeps the only compute slot busy.
+LONG="{$PSD,\"tol\":1e-10,\"vary\":\"D\",\"values\":[2.2,2.3,2.4,2.5,2.6,2.7,2.8,2.9]}"
+# ~1 s of work: finishes during a graceful shutdown.
+MEDIUM="{$PSD,\"tol\":1e-9}"
+[ -n "$WRAP" ] && MEDIUM="{$PSD}" # valgrind is ~30 times slower
+
+# ================= main server: one compute slot =================
+if ! start main --web "$tmp/web" --compute-slots 1 --threads 8; then
+    echo "not ok - ljgapd did not print its listening line: $(head -c 300 "$tmp/main.err")"
+    exit 1
+fi
+check "first line is 'listening on http://127.0.0.1:PORT/'" \
+    grep -qE '^listening on http://127\.0\.0\.1:[0-9]+/$' "$tmp/main.out"
+
+# ---- plain GET endpoints ----
+req GET /healthz
+check "GET /healthz: 200 {\"status\":\"pass\"}" eval '[ "$STATUS" = 200 ] && json ".status == \"pass\""'
+port=${URL##*:}
+exec 3<>"/dev/tcp/127.0.0.1/$port"
+printf 'HEAD /healthz HTTP/1.0\r\n\r\n' >&3
+timeout 5 cat <&3 >"$tmp/head"
+exec 3>&-
+check "HEAD /healthz: 200, headers only" eval 'head -n 1 "$tmp/head" | grep -q " 200 " &&
+    ! grep -q pass "$tmp/head"'
+req GET /version
+check "GET /version: program, version and the three library versions" eval '[ "$STATUS" = 200 ] &&
+    json ".program == \"ljgapd\" and (.version | test(\"^[0-9]+\\\\.[0-9]+\"))
+          and (.libraries.libmicrohttpd | startswith(\"0.9.\"))
+          and (.libraries.cjson | length > 0) and (.libraries.gsl | length > 0)"'
+check "/version matches LJGAP_VERSION" eval 'json --arg v "$(sed -n "s/^#define LJGAP_VERSION \"\(.*\)\"/\1/p" include/ljgap.h)" ".version == \$v"'
+
+req GET /openapi.json
+check "GET /openapi.json: OpenAPI 3 JSON" eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
+for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations; do
+    check "openapi: POST $p with 400, 413, 415, 422 and 503 problems" \
+        json --arg p "$p" '.paths[$p].post.responses | has("400") and has("413") and has("415")
+            and has("422") and has("503")'
+done
+for p in /healthz /version /openapi.json /; do
+    check "openapi: GET $p" json --arg p "$p" '.paths[$p].get.responses["200"]'
+done
+check "openapi: 404 and 405 problems, Retry-After and Allow headers, the Problem schema" \
+    json '(.components.responses | has("NotFound") and has("MethodNotAllowed"))
+        and .components.responses.ServiceUnavailable.headers["Retry-After"]
+        and .components.responses.MethodNotAllowed.headers.Allow
+        and (.components.schemas.Problem.properties | has("type") and has("errors"))'
+check "openapi: every \$ref resolves" json '. as $doc | [.. | objects | .["$ref"]? // empty
+    | ltrimstr("#/") | split("/")] | all(. as $path | $doc | getpath($path) != null)'
+
+# ---- static files ----
+req GET /
+check "GET /: index.html as text/html, titled ljgap, linking /openapi.json" eval '[ "$STATUS" = 200 ] &&
+    [[ "$(hdr Content-Type)" == text/html* ]] && grep -q "<title>ljgap</title>" "$tmp/body" &&
+    grep -q "/openapi.json" "$tmp/body"'
+req GET /index.html
+check "GET /index.html: the same page" cmp -s "$tmp/body" web/index.html
+for f in "app.js text/javascript" "style.css text/css" "pic.png image/png" \
+    "icon.svg image/svg+xml" "data.json application/json" "vendor/lib.js text/javascript"; do
+    name=${f% *} type=${f#* }
+    req GET "/$name"
+    check "GET /$name: 200 $type with the file's bytes" eval '[ "$STATUS" = 200 ] &&
+        [[ "$(hdr Content-Type)" == "$type"* ]] && cmp -s "$tmp/body" "$tmp/web/$name"'
+done
+for p in /secret.txt /.hidden.js /vendor/deeper/x.js /nope.js /../outside.js /%2e%2e/outside.js \
+    /vendor/../../outside.js /vendor/%2e%2e/%2e%2e/outside.js /..%2foutside.js; do
+    req GET "$p" --path-as-is
+    check "GET $p: 404 problem (allowlist, no traversal)" problem 404
+done
+
+# ---- compute endpoints ----
+post adhesion "{$PSD}"
+check "POST /v1/adhesion: 200 with the adhesion fields, meta, error" eval '[ "$STATUS" = 200 ] &&
+    [ "$(hdr Content-Type)" = application/json ] &&
+    json "[.g_eq, .sigma_max, .g_at_max, .dgamma_eff, .m0, .k0] | all(type == \"number\")" &&
+    json ".meta.cached == false and (.meta.warnings | type == \"array\") and (.error | type == \"object\")"'
+cp "$tmp/body" "$tmp/first.json"
+post adhesion "{$PSD}"
+check "the same request again: answered from the cache (meta.cached true), same numbers" eval '
+    [ "$STATUS" = 200 ] && json ".meta.cached == true" &&
+    [ "$(jq -c "del(.meta)" "$tmp/body")" = "$(jq -c "del(.meta)" "$tmp/first.json")" ]'
+post adhesion "{$PSD} "
+check "one byte more is another cache key (meta.cached false)" eval '[ "$STATUS" = 200 ] &&
+    json ".meta.cached == false"'
+post traction "{$PSD,\"g_ave\":{\"min\":1.5,\"max\":4,\"n\":5}}"
+check "POST /v1/traction: 200 with g_ave[], sigma[] and summary" eval '[ "$STATUS" = 200 ] &&
+    json "(.g_ave | length == 5) and (.sigma | length == 5) and (.summary.g_eq | type == \"number\")"'
+post pdf "{$PSD,\"g_ave\":2.5,\"k2\":[2,8]}"
+check "POST /v1/pdf: 200 with one PDF per snapshot" eval '[ "$STATUS" = 200 ] &&
+    json "(.pdfs | length == 2) and (.pdfs[0].g | length > 1) and (.pdfs[0].phi | length > 1)"'
+post sweep "{$PSD,\"vary\":\"D\",\"values\":[2.3,2.6]}"
+check "POST /v1/sweep: 200 with one result per value" eval '[ "$STATUS" = 200 ] &&
+    json ".vary == \"D\" and (.results | length == 2)"'
+
+# ---- problems ----
+post adhesion '{"psd":'
+check "malformed JSON: 400 problem" problem 400
+req GET /nope
+check "GET /nope: 404 problem" problem 404
+post nope "{$PSD}"
+check "POST /v1/nope: 404 problem" problem 404
+req GET /v1/simulations/abc
+check "GET /v1/simulations/abc (not there yet): 404 problem" problem 404
+req GET /v1/adhesion
+check "GET /v1/adhesion: 405 problem with Allow: POST" eval 'problem 405 && [ "$(hdr Allow)" = POST ]'
+req POST /healthz -H 'Content-Type: application/json' -d '{}'
+check "POST /healthz: 405 problem with Allow: GET, HEAD" eval 'problem 405 && [ "$(hdr Allow)" = "GET, HEAD" ]'
+req DELETE /version
+check "DELETE /version: 405 problem" problem 405
+req POST /index.html -H 'Content-Type: application/json' -d '{}'
+check "POST /index.html: 405 problem" problem 405
+
+head -c $((1024 * 1024 + 1)) /dev/zero | tr '\0' ' ' >"$tmp/big.json"
+head -c $((1024 * 1024 - 100)) /dev/zero | tr '\0' ' ' >"$tmp/almost.json"
+echo "{$PSD}" >>"$tmp/almost.json"
+post adhesion @"$tmp/big.json"
+check "body of 1 MiB + 1 with Content-Length: 413 problem" problem 413
+check "the 413 was decided from Content-Length before reading (no 100 Continue)" \
+    eval '! grep -q "100 Continue" "$tmp/hdrs"'
+req POST /v1/adhesion -H 'Content-Type: application/json' -H 'Transfer-Encoding: chunked' \
+    --data-binary @"$tmp/big.json"
+check "chunked body over 1 MiB: 413 problem" problem 413
+req POST /v1/adhesion -H 'Content-Type: application/json' -H 'Transfer-Encoding: chunked' \
+    --data-binary @"$tmp/almost.json"
+check "chunked body just under 1 MiB is read whole: 200" eval '[ "$STATUS" = 200 ]'
+req POST /v1/adhesion -H 'Content-Type: text/plain' --data-binary "{$PSD}"
+check "Content-Type text/plain: 415 problem" problem 415
+req POST /v1/adhesion --data-binary "{$PSD}"
+check "curl's default form Content-Type: 415 problem" problem 415
+req POST /v1/adhesion -H 'Content-Type: application/json; charset=utf-8' --data-binary "{$PSD}"
+check "application/json; charset=utf-8 is accepted: 200" eval '[ "$STATUS" = 200 ]'
+post adhesion '{"psd":{"kind":"power","D":2.5,"k1":0.3,"k2":8,"C":0.0796}}'
+check "k1 below k0: 422 problem pointing at /psd/k1" eval 'problem 422 &&
+    json "any(.errors[]; .pointer == \"/psd/k1\")"'
+post adhesion "{$PSD,\"method\":\"montecarlo\",\"samples\":2000000}"
+check "samples over the cap: 422 naming the cap (1000000) at /samples" eval 'problem 422 &&
+    json "any(.errors[]; .pointer == \"/samples\" and (.detail | contains(\"1000000\")))"'
+post pdf "{$PSD,\"g_ave\":2.5,\"k2\":[8],\"grid\":{\"min\":0.5,\"max\":8,\"n\":100000}}"
+check "grid over the cap: 422 at /grid/n" eval 'problem 422 && json "any(.errors[]; .pointer == \"/grid/n\")"'
+
+# ---- request ids and the log ----
+req GET /healthz -H 'X-Request-Id: test-id.42'
+check "X-Request-Id is echoed" eval '[ "$(hdr X-Request-Id)" = test-id.42 ]'
+req GET /healthz
+id1=$(hdr X-Request-Id)
+req GET /healthz -H 'X-Request-Id: bad id with spaces'
+id2=$(hdr X-Request-Id)
+check "X-Request-Id is made up when absent or unusable, different each time" \
+    eval '[ -n "$id1" ] && [ -n "$id2" ] && [ "$id1" != "$id2" ] && [ "$id2" != "bad id with spaces" ]'
+sleep 0.2
+check "one log line per request: method, path, status, ms, id" \
+    grep -qE '^GET /healthz 200 [0-9.]+ms id=test-id\.42$' "$tmp/main.err"
+check "log line of a problem" grep -qE '^POST /v1/nope 404 [0-9.]+ms id=[0-9a-f]+$' "$tmp/main.err"
+
+# ---- every compute slot busy ----
+curl -s --max-time 60 -o "$tmp/long.json" -w '%{http_code}' -H 'Content-Type: application/json' \
+    --data-binary "$LONG" "$URL/v1/sweep" >"$tmp/long.status" &
+longpid=$!
+sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.5 * s }')"
+t0=$(date +%s.%N)
+req GET /healthz
+hz=$(elapsed "$t0")
+check "/healthz while the only compute slot is busy: 200 in ${hz} s (< 2 s)" \
+    eval '[ "$STATUS" = 200 ] && lt "$hz" $((2 * SLOW))'
+t0=$(date +%s.%N)
+req GET /
+st=$(elapsed "$t0")
+check "static page while busy: 200 in ${st} s (< 2 s)" eval '[ "$STATUS" = 200 ] && lt "$st" $((2 * SLOW))'
+post traction "{$PSD,\"g_ave\":[2,3]}"
+check "second computation while busy: 503 problem with Retry-After" eval 'problem 503 &&
+    [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]]'
+post adhesion "{$PSD}"
+check "cached answer while busy: 200, no slot needed" eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
+
+# ---- SIGTERM with a computation in flight: cancelled after the grace period ----
+t0=$(date +%s.%N)
+kill -TERM "$PID"
+wait "$PID"
+rc=$?
+down=$(elapsed "$t0")
+wait "$longpid"
+check "SIGTERM with a long computation in flight: exit 0 in ${down} s (< 10 s)" \
+    eval '[ "$rc" = 0 ] && lt "$down" $((10 * SLOW))'
+check "the in-flight request still got an answer ($(cat "$tmp/long.status"))" \
+    eval '[ "$(cat "$tmp/long.status")" != 000 ]'
+check "after exit the port is closed" eval '! curl -s --max-time 2 "$URL/healthz" >/dev/null'
+check "the log says it stopped" grep -q "stopped" "$tmp/main.err"
+if [ -n "$WRAP" ]; then
+    check "valgrind: $(grep -E "in use at exit|ERROR SUMMARY" "$tmp/main.err" | cut -d' ' -f2- | tr '\n' ' ')" \
+        eval 'grep -q "All heap blocks were freed" "$tmp/main.err" &&
+        grep -q "ERROR SUMMARY: 0 errors" "$tmp/main.err"'
+fi
+
+# ================= graceful shutdown: in-flight work finishes =================
+if start graceful --compute-slots 2; then
+    curl -s --max-time 30 -o "$tmp/medium.json" -w '%{http_code}' \
+        -H 'Content-Type: application/json' --data-binary "$MEDIUM" "$URL/v1/adhesion" \
+        >"$tmp/medium.status" &
+    mpid=$!
+    sleep 0.2
+    kill -TERM "$PID"
+    wait "$PID"
+    rc=$?
+    wait "$mpid"
+    check "SIGTERM lets a short computation finish: it answers 200, exit 0" \
+        eval '[ "$rc" = 0 ] && [ "$(cat "$tmp/medium.status")" = 200 ]'
+else
+    echo "not ok - second server did not start"
+fi
+
+# ================= connection limit =================
+if start limit --threads 3 --compute-slots 1; then
+    port=${URL##*:}
+    exec 3<>"/dev/tcp/127.0.0.1/$port" 4<>"/dev/tcp/127.0.0.1/$port" 5<>"/dev/tcp/127.0.0.1/$port"
+    sleep 0.3
+    check "--threads 3: a fourth connection is refused" \
+        eval '! curl -s --max-time 2 -o /dev/null "$URL/healthz"'
+    exec 3>&- 4>&- 5>&-
+    sleep 0.3
+    req GET /healthz
+    check "once they close, connections are accepted again" eval '[ "$STATUS" = 200 ]'
+    kill -TERM "$PID"
+    wait "$PID"
+    check "exit 0 with idle connections" eval '[ $? = 0 ]'
+else
+    echo "not ok - third server did not start"
+fi
+
+check "bad --port is refused with status 2" eval '"$BIN" --port 70000 >/dev/null 2>&1; [ $? = 2 ]'
+check "--threads not above --compute-slots is refused" \
+    eval '"$BIN" --threads 2 --compute-slots 2 >/dev/null 2>&1; [ $? = 2 ]'
+check "--help explains --threads" eval '"$BIN" --help | grep -q -- "--threads N.*connections"'
