@@ -556,6 +556,7 @@ static enum MHD_Result on_access(void *cls, struct MHD_Connection *c, const char
         atomic_fetch_add(&inflight, 1);
         return request_begin(c, r, method);
     }
+    r->url = url; /* the same string on every call; kept current to be safe */
     if (*upload_data_size) {
         size_t n = *upload_data_size;
         *upload_data_size = 0;

@@ -79,6 +79,7 @@ post() { # post ENDPOINT BODY: POST JSON to /v1/ENDPOINT
     req POST "/v1/$1" -H 'Content-Type: application/json' --data-binary "$2"
 }
 problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
+    jq -r .type "$tmp/body" >>"$tmp/types" 2>/dev/null
     [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
         json --argjson s "$1" '.status == $s and (.type | type == "string") and
             (.title | type == "string") and (.detail | type == "string")'
@@ -261,6 +262,11 @@ check "second computation while busy: 503 problem with Retry-After" eval 'proble
     [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]]'
 post adhesion "{$PSD}"
 check "cached answer while busy: 200, no slot needed" eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
+
+req GET /openapi.json
+check "every problem type met here is listed in openapi.json" eval 'jq -e --rawfile seen "$tmp/types" \
+    "(\$seen | split(\"\\n\") | map(select(length > 0))) - .components.schemas.Problem.properties.type.enum == []" \
+    "$tmp/body" >/dev/null'
 
 # ---- SIGTERM with a computation in flight: cancelled after the grace period ----
 t0=$(date +%s.%N)
