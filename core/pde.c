@@ -42,6 +42,7 @@
 #define DZETA0 0.25     /* zeta step at level 0 */
 #define DXI0 0.02       /* relative grid spacing at level 0 */
 #define MAX_LEVEL 7     /* at most 2^7 times the level-0 resolution */
+#define MAX_STEPS 4e6   /* steps of one march, at most */
 #define G_HI_MIN 60.0   /* upper end of the traction grid, at least */
 #define G_LO_FLOOR 0.04 /* never put the lower end below this (or half the lowest gap asked) */
 #define G_LO_FACTOR 0.8 /* each lowering of the lower end */
@@ -186,17 +187,18 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
      * (a remainder under 0.3 dz is merged into the step before). So the nodes do not move
      * when kmax moves (it follows g_lo), and level L+1 holds every node of level L. */
     double z1 = zeta_of(&z, psd->k1);
-    size_t cap = 8 + 2 * nc;
-    for (size_t c = 0; c < nc; c++) {
-        double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
-        cap = 8 + 2 * nc + (size_t)ceil((zeta_of(&z, kc) - z1) / dz);
-    }
+    double zend = zeta_of(&z, kmax);
+    if (!isfinite(z1) || !isfinite(zend) || !(zend > z1)) return LJGAP_EFAIL;
+    /* regular steps, a Rannacher split and a possible extra step per cut, the tail */
+    double need = (zend - z1) / dz + 4.0 + 2.0 * (double)nc;
     size_t mtail = 0;
     if (inf && M->tau_rem > 1e-15 * psd->m0) {
         mtail = (size_t)((2 + ceil(TAIL_STEPS0 * 4.0 * M->tau_rem / psd->m0)) * scale);
-        cap += mtail;
+        need += (double)mtail;
     }
-    M->s = malloc((cap + 4) * sizeof *M->s);
+    if (!(need < MAX_STEPS)) return LJGAP_ECAP;
+    size_t cap = (size_t)need + 4;
+    M->s = malloc(cap * sizeof *M->s);
     if (!M->s) return LJGAP_ENOMEM;
     size_t m = 0;
     double kprev = psd->k1, zprev = z1;
@@ -205,7 +207,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     for (size_t c = 0; c < nc; c++) {
         double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
         double zc = zeta_of(&z, kc);
-        while (zprev < zc) {
+        while (zprev < zc && m + 2 < cap) {
             double zn = z1 + (double)(jn + 1) * dz;
             double kb;
             if (zn >= zc - 0.3 * dz)
@@ -239,7 +241,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
         }
         if (m > 0 && !isinf(cuts[c])) M->s[m - 1].snap = (int)c;
     }
-    if (mtail) {
+    if (mtail && m + mtail <= cap) {
         double t0 = ljgap_psd_cumvar(psd, kmax), dt = M->tau_rem / (double)mtail;
         for (size_t j = 0; j < mtail; j++) {
             double ka = M->s[m - 1].kb;
@@ -465,6 +467,12 @@ typedef struct {
     long work; /* grid points x steps spent */
 } pde_ctx;
 
+/* Which cap stopped a computation, for the warnings. */
+static const char *cap_reason(const pde_ctx *C)
+{
+    return ljgap_now() > C->deadline ? "time cap (max_seconds)" : "work cap (max_work)";
+}
+
 /* Backward solve: u on the grid of level L between ln g_lo and ln g_hi. */
 static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G, double **uout)
 {
@@ -635,9 +643,9 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
         st = curve_at(&C, g_lo, g_hi, L + 1, g_ave, n, &B, w);
         if (st == LJGAP_ECAP && L > 0) {
             ljgap_warn(w,
-                       "work cap reached at resolution level %d: the error estimate is above "
-                       "the requested tolerance",
-                       L);
+                       "%s reached at resolution level %d: the error estimate is above the "
+                       "requested tolerance",
+                       cap_reason(&C), L);
             st = LJGAP_OK;
             break;
         }
@@ -880,9 +888,9 @@ int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
         st = pdf_level_run(&C, g_ave, g_lo, g_hi, cuts, nk2, L + 1, &B);
         if (st == LJGAP_ECAP && nR > 0) {
             ljgap_warn(w,
-                       "work cap reached at resolution level %d: the error estimate is above "
-                       "the requested tolerance",
-                       L);
+                       "%s reached at resolution level %d: the error estimate is above the "
+                       "requested tolerance",
+                       cap_reason(&C), L);
             st = LJGAP_OK;
             break;
         }

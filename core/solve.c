@@ -22,6 +22,21 @@ static int check_common(const ljgap_psd *psd, const ljgap_opts *o, ljgap_warning
         return LJGAP_EINVAL;
     }
     if (!(o->tol > 0) || !isfinite(o->tol)) return LJGAP_EINVAL;
+    /* the range where the solvers' grids and marches are sized sensibly */
+    if (!(psd->m0 <= LJGAP_M0_MAX)) {
+        ljgap_warn(w,
+                   "m0 = %g is above %g (h_rms above %g epsilon): outside the range this "
+                   "service computes",
+                   psd->m0, LJGAP_M0_MAX, sqrt(LJGAP_M0_MAX));
+        return LJGAP_EINVAL;
+    }
+    if (!(psd->k1 <= LJGAP_K_MAX) || (isfinite(psd->k2) && !(psd->k2 <= LJGAP_K_MAX))) {
+        ljgap_warn(w,
+                   "wavenumbers above %g (in units of 1/chi) are outside the range this "
+                   "service computes; use k2 = infinity for an unbounded spectrum",
+                   LJGAP_K_MAX);
+        return LJGAP_EINVAL;
+    }
     return LJGAP_OK;
 }
 
@@ -31,7 +46,10 @@ int ljgap_traction(const ljgap_psd *psd, const ljgap_opts *o, const double *g_av
     int st = check_common(psd, o, w);
     if (st) return st;
     for (size_t i = 0; i < n; i++)
-        if (!(g_ave[i] > 0) || !isfinite(g_ave[i])) return LJGAP_EINVAL;
+        if (!(g_ave[i] >= LJGAP_G_MIN && g_ave[i] <= LJGAP_G_MAX)) {
+            ljgap_warn(w, "mean gaps must lie in [%g, %g]", LJGAP_G_MIN, LJGAP_G_MAX);
+            return LJGAP_EINVAL;
+        }
     switch (o->method) {
     case LJGAP_METHOD_PDE:
         return ljgap_traction_pde(psd, o, g_ave, n, sigma, sum, w);
@@ -48,7 +66,10 @@ int ljgap_pdf_compute(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, c
 {
     int st = check_common(psd, o, w);
     if (st) return st;
-    if (!(g_ave > 0) || !isfinite(g_ave)) return LJGAP_EINVAL;
+    if (!(g_ave >= LJGAP_G_MIN && g_ave <= LJGAP_G_MAX)) {
+        ljgap_warn(w, "mean gaps must lie in [%g, %g]", LJGAP_G_MIN, LJGAP_G_MAX);
+        return LJGAP_EINVAL;
+    }
     for (size_t i = 0; i < nk2; i++) {
         out[i].g = out[i].phi = NULL;
         out[i].n = 0;

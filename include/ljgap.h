@@ -104,6 +104,12 @@ double ljgap_psd_k_of_cumvar(const ljgap_psd *psd, double tau);
  * log-spaced panels (relative accuracy ~1e-12 for smooth P). */
 double ljgap_packet_var(const ljgap_psd *psd, double g0, double ka, double kb);
 
+/* ---- the range the solvers accept (LJGAP_EINVAL with a warning outside) ---- */
+#define LJGAP_M0_MAX 1e4 /* height variance m0 (h_rms up to 100 epsilon) */
+#define LJGAP_K_MAX 1e15 /* finite wavenumbers k1, k2 */
+#define LJGAP_G_MIN 1e-3 /* mean gaps g_ave */
+#define LJGAP_G_MAX 1e6
+
 /* ---- methods ---- */
 typedef enum { LJGAP_METHOD_PDE = 0, LJGAP_METHOD_PAPER = 1, LJGAP_METHOD_MC = 2 } ljgap_method;
 

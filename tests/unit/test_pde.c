@@ -452,7 +452,7 @@ static void test_work_cap_warns(void **state)
     ljgap_warnings w = {0};
     assert_int_equal(ljgap_traction(&p, &o, NULL, 0, NULL, &s, &w), LJGAP_OK);
     assert_true(w.n >= 1);
-    assert_true(strstr(w.msg[w.n - 1], "cap") != NULL);
+    assert_true(strstr(w.msg[w.n - 1], "work cap") != NULL);
     assert_true(s.g_eq.err > 1e-12 * s.g_eq.value);
     o.max_work = 1000; /* not even one level */
     w.n = 0;
