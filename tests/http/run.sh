@@ -106,7 +106,8 @@ check "first line is 'listening on http://127.0.0.1:PORT/'" \
 
 # ---- plain GET endpoints ----
 req GET /healthz
-check "GET /healthz: 200 {\"status\":\"pass\"}" eval '[ "$STATUS" = 200 ] && json ".status == \"pass\""'
+check "GET /healthz: 200 {\"status\":\"pass\"}" \
+    eval '[ "$STATUS" = 200 ] && json ".status == \"pass\""'
 port=${URL##*:}
 exec 3<>"/dev/tcp/127.0.0.1/$port"
 printf 'HEAD /healthz HTTP/1.0\r\n\r\n' >&3
@@ -119,10 +120,12 @@ check "GET /version: program, version and the three library versions" eval '[ "$
     json ".program == \"ljgapd\" and (.version | test(\"^[0-9]+\\\\.[0-9]+\"))
           and (.libraries.libmicrohttpd | startswith(\"0.9.\"))
           and (.libraries.cjson | length > 0) and (.libraries.gsl | length > 0)"'
-check "/version matches LJGAP_VERSION" eval 'json --arg v "$(sed -n "s/^#define LJGAP_VERSION \"\(.*\)\"/\1/p" include/ljgap.h)" ".version == \$v"'
+version=$(sed -n 's/^#define LJGAP_VERSION "\(.*\)"/\1/p' include/ljgap.h)
+check "/version matches LJGAP_VERSION ($version)" json --arg v "$version" '.version == $v'
 
 req GET /openapi.json
-check "GET /openapi.json: OpenAPI 3 JSON" eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
+check "GET /openapi.json: OpenAPI 3 JSON" \
+    eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
 for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations; do
     check "openapi: POST $p with 400, 413, 415, 422 and 503 problems" \
         json --arg p "$p" '.paths[$p].post.responses | has("400") and has("413") and has("415")
@@ -141,7 +144,8 @@ check "openapi: every \$ref resolves" json '. as $doc | [.. | objects | .["$ref"
 
 # ---- static files ----
 req GET /
-check "GET /: index.html as text/html, titled ljgap, linking /openapi.json" eval '[ "$STATUS" = 200 ] &&
+check "GET /: index.html as text/html, titled ljgap, linking /openapi.json" \
+    eval '[ "$STATUS" = 200 ] &&
     [[ "$(hdr Content-Type)" == text/html* ]] && grep -q "<title>ljgap</title>" "$tmp/body" &&
     grep -q "/openapi.json" "$tmp/body"'
 req GET /index.html
@@ -164,7 +168,8 @@ post adhesion "{$PSD}"
 check "POST /v1/adhesion: 200 with the adhesion fields, meta, error" eval '[ "$STATUS" = 200 ] &&
     [ "$(hdr Content-Type)" = application/json ] &&
     json "[.g_eq, .sigma_max, .g_at_max, .dgamma_eff, .m0, .k0] | all(type == \"number\")" &&
-    json ".meta.cached == false and (.meta.warnings | type == \"array\") and (.error | type == \"object\")"'
+    json ".meta.cached == false and (.meta.warnings | type == \"array\")
+          and (.error | type == \"object\")"'
 cp "$tmp/body" "$tmp/first.json"
 post adhesion "{$PSD}"
 check "the same request again: answered from the cache (meta.cached true), same numbers" eval '
@@ -175,7 +180,8 @@ check "one byte more is another cache key (meta.cached false)" eval '[ "$STATUS"
     json ".meta.cached == false"'
 post traction "{$PSD,\"g_ave\":{\"min\":1.5,\"max\":4,\"n\":5}}"
 check "POST /v1/traction: 200 with g_ave[], sigma[] and summary" eval '[ "$STATUS" = 200 ] &&
-    json "(.g_ave | length == 5) and (.sigma | length == 5) and (.summary.g_eq | type == \"number\")"'
+    json "(.g_ave | length == 5) and (.sigma | length == 5)
+          and (.summary.g_eq | type == \"number\")"'
 post pdf "{$PSD,\"g_ave\":2.5,\"k2\":[2,8]}"
 check "POST /v1/pdf: 200 with one PDF per snapshot" eval '[ "$STATUS" = 200 ] &&
     json "(.pdfs | length == 2) and (.pdfs[0].g | length > 1) and (.pdfs[0].phi | length > 1)"'
@@ -193,9 +199,11 @@ check "POST /v1/nope: 404 problem" problem 404
 req GET /v1/simulations/abc
 check "GET /v1/simulations/abc (not there yet): 404 problem" problem 404
 req GET /v1/adhesion
-check "GET /v1/adhesion: 405 problem with Allow: POST" eval 'problem 405 && [ "$(hdr Allow)" = POST ]'
+check "GET /v1/adhesion: 405 problem with Allow: POST" \
+    eval 'problem 405 && [ "$(hdr Allow)" = POST ]'
 req POST /healthz -H 'Content-Type: application/json' -d '{}'
-check "POST /healthz: 405 problem with Allow: GET, HEAD" eval 'problem 405 && [ "$(hdr Allow)" = "GET, HEAD" ]'
+check "POST /healthz: 405 problem with Allow: GET, HEAD" \
+    eval 'problem 405 && [ "$(hdr Allow)" = "GET, HEAD" ]'
 req DELETE /version
 check "DELETE /version: 405 problem" problem 405
 req POST /index.html -H 'Content-Type: application/json' -d '{}'
@@ -227,7 +235,8 @@ post adhesion "{$PSD,\"method\":\"montecarlo\",\"samples\":2000000}"
 check "samples over the cap: 422 naming the cap (1000000) at /samples" eval 'problem 422 &&
     json "any(.errors[]; .pointer == \"/samples\" and (.detail | contains(\"1000000\")))"'
 post pdf "{$PSD,\"g_ave\":2.5,\"k2\":[8],\"grid\":{\"min\":0.5,\"max\":8,\"n\":100000}}"
-check "grid over the cap: 422 at /grid/n" eval 'problem 422 && json "any(.errors[]; .pointer == \"/grid/n\")"'
+check "grid over the cap: 422 at /grid/n" \
+    eval 'problem 422 && json "any(.errors[]; .pointer == \"/grid/n\")"'
 
 # ---- request ids and the log ----
 req GET /healthz -H 'X-Request-Id: test-id.42'
@@ -237,7 +246,8 @@ id1=$(hdr X-Request-Id)
 req GET /healthz -H 'X-Request-Id: bad id with spaces'
 id2=$(hdr X-Request-Id)
 check "X-Request-Id is made up when absent or unusable, different each time" \
-    eval '[ -n "$id1" ] && [ -n "$id2" ] && [ "$id1" != "$id2" ] && [ "$id2" != "bad id with spaces" ]'
+    eval '[ -n "$id1" ] && [ -n "$id2" ] && [ "$id1" != "$id2" ] &&
+        [ "$id2" != "bad id with spaces" ]'
 sleep 0.2
 check "one log line per request: method, path, status, ms, id" \
     grep -qE '^GET /healthz 200 [0-9.]+ms id=test-id\.42$' "$tmp/main.err"
@@ -256,17 +266,19 @@ check "/healthz while the only compute slot is busy: 200 in ${hz} s (< 2 s)" \
 t0=$(date +%s.%N)
 req GET /
 st=$(elapsed "$t0")
-check "static page while busy: 200 in ${st} s (< 2 s)" eval '[ "$STATUS" = 200 ] && lt "$st" $((2 * SLOW))'
+check "static page while busy: 200 in ${st} s (< 2 s)" \
+    eval '[ "$STATUS" = 200 ] && lt "$st" $((2 * SLOW))'
 post traction "{$PSD,\"g_ave\":[2,3]}"
 check "second computation while busy: 503 problem with Retry-After" eval 'problem 503 &&
     [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]]'
 post adhesion "{$PSD}"
-check "cached answer while busy: 200, no slot needed" eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
+check "cached answer while busy: 200, no slot needed" \
+    eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
 
 req GET /openapi.json
-check "every problem type met here is listed in openapi.json" eval 'jq -e --rawfile seen "$tmp/types" \
-    "(\$seen | split(\"\\n\") | map(select(length > 0))) - .components.schemas.Problem.properties.type.enum == []" \
-    "$tmp/body" >/dev/null'
+check "every problem type met here is listed in openapi.json" \
+    json --rawfile seen "$tmp/types" '($seen | split("\n") | map(select(length > 0)))
+        - .components.schemas.Problem.properties.type.enum == []'
 
 # ---- SIGTERM with a computation in flight: cancelled after the grace period ----
 t0=$(date +%s.%N)
@@ -282,7 +294,8 @@ check "the in-flight request still got an answer ($(cat "$tmp/long.status"))" \
 check "after exit the port is closed" eval '! curl -s --max-time 2 "$URL/healthz" >/dev/null'
 check "the log says it stopped" grep -q "stopped" "$tmp/main.err"
 if [ -n "$WRAP" ]; then
-    check "valgrind: $(grep -E "in use at exit|ERROR SUMMARY" "$tmp/main.err" | cut -d' ' -f2- | tr '\n' ' ')" \
+    summary=$(grep -E "in use at exit|ERROR SUMMARY" "$tmp/main.err" | cut -d' ' -f2- | tr '\n' ' ')
+    check "valgrind: $summary" \
         eval 'grep -q "All heap blocks were freed" "$tmp/main.err" &&
         grep -q "ERROR SUMMARY: 0 errors" "$tmp/main.err"'
 fi
