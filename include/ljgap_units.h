@@ -1,0 +1,91 @@
+/* ljgap_units.h -- physical units and the hybrid JKR contact model (theory.md §1 and §6).
+ *
+ * The core works in the dimensionless units of theory.md §1. A material (effective modulus
+ * E*, flat-surface work of adhesion Δγ, Lennard-Jones length ε) fixes the scales:
+ *   χ = 3ε²E* /(16Δγ)   (length, m)         k̃ = χk,  g̃ = g/ε
+ *   σ0 = 16Δγ/(9√3ε)   (stress, Pa, eq. 9)  P̃S(k̃) = PS(k)/(ε²χ²)
+ * PSD convention: m0 = 2π∫k PS(k) dk (isotropic 2-D PSD, (22)); tools that define
+ * m0 = ∫∫PS d²q with q = 2πk, or use angular wavenumbers, differ by factors of (2π)².
+ * Conversion functions are pure arithmetic; they know nothing of JSON.
+ */
+#ifndef LJGAP_UNITS_H
+#define LJGAP_UNITS_H
+
+#include "ljgap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A material in SI units. */
+typedef struct {
+    double E_star;  /* effective modulus E* (Pa), > 0 */
+    double dgamma;  /* flat-surface work of adhesion Δγ (J/m²), > 0 */
+    double epsilon; /* Lennard-Jones length ε (m), > 0 */
+} ljgap_material;
+
+/* E* of two elastic half-spaces: 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2. Returns LJGAP_EINVAL
+ * (*E_star untouched) unless E1, E2 > 0 and ν1, ν2 lie in (-1, 0.5]. */
+int ljgap_units_E_star(double E1, double nu1, double E2, double nu2, double *E_star);
+/* Fills m; LJGAP_EINVAL unless every value is finite and > 0. */
+int ljgap_material_set(ljgap_material *m, double E_star, double dgamma, double epsilon);
+
+double ljgap_units_chi(const ljgap_material *m);    /* χ = 3ε²E* /(16Δγ), m */
+double ljgap_units_sigma0(const ljgap_material *m); /* σ0 = 16Δγ/(9√3ε), Pa */
+
+/* Wavenumber (1/m) <-> k̃ = χk. */
+double ljgap_units_k_to_dimless(const ljgap_material *m, double k);
+double ljgap_units_k_to_si(const ljgap_material *m, double kt);
+/* PSD value (m⁴) <-> P̃S = PS/(ε²χ²). */
+double ljgap_units_P_to_dimless(const ljgap_material *m, double P);
+double ljgap_units_P_to_si(const ljgap_material *m, double Pt);
+/* Power-law prefactor of PS = C k^(2D-8) (C in m^(2D-4)) <-> C̃ = C χ^(6-2D)/ε². */
+double ljgap_units_C_to_dimless(const ljgap_material *m, double C, double D);
+double ljgap_units_C_to_si(const ljgap_material *m, double Ct, double D);
+/* Lengths (gaps, h_rms; m) <-> units of ε; variances (m²) <-> units of ε². */
+double ljgap_units_len_to_dimless(const ljgap_material *m, double x);
+double ljgap_units_len_to_si(const ljgap_material *m, double xt);
+double ljgap_units_var_to_dimless(const ljgap_material *m, double v);
+double ljgap_units_var_to_si(const ljgap_material *m, double vt);
+
+/* ---- contact.c: a sphere of radius R on the rough flat (theory.md §6) ---- */
+
+/* Pull-off load of the Maugis-Dugdale model under load control, in units of πwR (w the
+ * work of adhesion): the minimum over the contact radius of the load. Tends to 1.5 (JKR) as
+ * lambda -> ∞ and to 2 (DMT) as lambda -> 0. lambda >= 0; the result carries the solver's
+ * error estimate. */
+int ljgap_md_pulloff(double lambda, ljgap_est *P_bar);
+
+/* Johnson-Greenwood (1997) adhesion map boundaries used for the regime. */
+#define LJGAP_LAMBDA_JKR 5.0 /* lambda above: JKR applies */
+#define LJGAP_LAMBDA_DMT 0.1 /* lambda below: DMT applies */
+
+typedef enum {
+    LJGAP_REGIME_DMT = 0,
+    LJGAP_REGIME_TRANSITION = 1,
+    LJGAP_REGIME_JKR = 2
+} ljgap_regime;
+const char *ljgap_regime_name(ljgap_regime r); /* "dmt", "transition", "jkr" */
+
+/* The hybrid JKR model of a sphere on the rough surface. */
+typedef struct {
+    ljgap_est jkr_smooth; /* 1.5πRΔγ (N): the smooth sphere */
+    ljgap_est jkr;        /* 1.5πRΔγeff (N): the paper's Section 6 */
+    ljgap_est dmt;        /* 2πRΔγeff (N) */
+    ljgap_est md;         /* Maugis-Dugdale with σ̄max, Δγeff (N) */
+    double tabor_smooth;  /* μ = (RΔγ²/(E*²ε³))^(1/3) of (7) */
+    ljgap_est tabor_eff;  /* μ with Δγeff and the range ε Δγeff/σ̄max of the mean law */
+    ljgap_est lambda;     /* Maugis' λ with σ̄max σ0 and Δγeff */
+    ljgap_regime regime;  /* from lambda and the LJGAP_LAMBDA_* boundaries */
+} ljgap_contact;
+
+/* Contact of a sphere of radius R (m) with the rough surface whose adhesion summary (in
+ * dimensionless units) is sum; errors of sum propagate linearly. LJGAP_EINVAL unless R > 0
+ * and sum's sigma_max, dgamma_eff are finite and > 0. */
+int ljgap_contact_compute(const ljgap_material *m, double R, const ljgap_summary *sum,
+                          ljgap_contact *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
