@@ -11,6 +11,12 @@
  *   - every 2xx answer has meta {method, elapsed_ms (measured here), version, warnings,
  *     cached}, and the core's warnings are copied into meta.warnings.
  *
+ * With a "material" block every answer adds "si": the scales χ (m) and σ0 (Pa) and the
+ * returned quantities in SI (gaps in m, tractions in Pa, Δγeff in J/m², core/units.c).
+ * "contact" (theory.md §6, core/contact.c) adds the sphere's pull-off forces. A sweep computes
+ * its values on up to limits.sweep_threads threads; each value is independent, so the answer
+ * is the sequential one.
+ *
  * Problem types: the "type" member of every application/problem+json answer
  * (openapi.json lists the same set; keep them in step):
  *   https://ljgap.example/problems/malformed-json  400  the body is not one valid JSON value
@@ -33,10 +39,12 @@
 #include "request.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define CT_JSON "application/json"
 #define CT_PROBLEM "application/problem+json"
@@ -66,13 +74,18 @@ static char oom_body[] = "{\"type\":\"https://ljgap.example/problems/out-of-memo
                          "\"title\":\"Out of memory\",\"status\":500,"
                          "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
 
-static const ljgap_limits limits_default = {
-    .max_seconds = 20.0, .max_samples = 1000000, .max_points = 10000, .cancel = NULL};
+static const ljgap_limits limits_default = {.max_seconds = 20.0,
+                                            .max_samples = 1000000,
+                                            .max_points = 10000,
+                                            .sweep_threads = 0,
+                                            .cancel = NULL};
 static ljgap_limits limits = limits_default; /* written only by ljgap_handler_set_limits */
 
 void ljgap_limits_default(ljgap_limits *l)
 {
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
     *l = limits_default;
+    l->sweep_threads = n > 0 ? n : 1;
 }
 
 void ljgap_handler_set_limits(const ljgap_limits *l)
@@ -223,6 +236,33 @@ static void put_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_k
     put(j, err_parent, err_key, err);
 }
 
+/* The adhesion fields of s in SI (m, Pa, J/m², m²) into obj. */
+static void put_si_summary(job *j, cJSON *obj, const ljgap_summary *s)
+{
+    const ljgap_material *m = &j->rq.mat;
+    double s0 = ljgap_units_sigma0(m);
+    put_num(j, obj, "g_eq_m", ljgap_units_len_to_si(m, s->g_eq.value), "si.g_eq_m", -1);
+    put_num(j, obj, "sigma_max_Pa", s->sigma_max.value * s0, "si.sigma_max_Pa", -1);
+    put_num(j, obj, "g_at_max_m", ljgap_units_len_to_si(m, s->g_at_max.value), "si.g_at_max_m", -1);
+    put_num(j, obj, "dgamma_eff_J_m2", s->dgamma_eff.value * m->dgamma, "si.dgamma_eff_J_m2", -1);
+    put_num(j, obj, "m0_m2", ljgap_units_var_to_si(m, s->m0), "si.m0_m2", -1);
+}
+
+/* The "si" object of an answer (NULL without a material): the scales, and the adhesion
+ * fields of s in SI when s is not NULL. */
+static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
+{
+    const ljgap_material *m = &j->rq.mat;
+    cJSON *si;
+    if (!j->rq.has_material) return NULL;
+    si = put(j, parent, "si", cJSON_CreateObject());
+    put_num(j, si, "chi_m", ljgap_units_chi(m), "si.chi_m", -1);
+    put_num(j, si, "sigma0_Pa", ljgap_units_sigma0(m), "si.sigma0_Pa", -1);
+    put_num(j, si, "E_star_Pa", m->E_star, "si.E_star_Pa", -1);
+    if (s) put_si_summary(j, si, s);
+    return si;
+}
+
 static void put_meta(job *j, double t0)
 {
     cJSON *meta = put(j, j->ans, "meta", cJSON_CreateObject());
@@ -280,6 +320,7 @@ static int run_adhesion(job *j)
     int st = summarise(j, &j->rq.psd, &sum, &j->rq.warn);
     if (st) return st;
     put_summary(j, j->ans, j->ans, "error", &sum);
+    put_si(j, j->ans, &sum);
     return LJGAP_OK;
 }
 
@@ -290,7 +331,7 @@ static int run_traction(job *j)
     ljgap_est *sigma = malloc(rq->nx * sizeof *sigma);
     ljgap_psd psd;
     ljgap_opts o;
-    cJSON *err, *sum_obj;
+    cJSON *err, *sum_obj, *si;
     int st = sigma ? prepare(j, &rq->psd, &psd, &o, &j->rq.warn) : LJGAP_ENOMEM;
     if (st) goto end;
     st = ljgap_traction(&psd, &o, rq->x, rq->nx, sigma, &sum, &j->rq.warn);
@@ -302,6 +343,16 @@ static int run_traction(job *j)
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "sigma", &sigma[0].err, rq->nx, sizeof *sigma, "error.sigma");
     put_summary(j, sum_obj, err, "summary", &sum);
+    if ((si = put_si(j, j->ans, NULL))) {
+        cJSON *a = put(j, si, "g_ave_m", cJSON_CreateArray());
+        cJSON *b = put(j, si, "sigma_Pa", cJSON_CreateArray());
+        for (size_t i = 0; a && b && i < rq->nx; i++) {
+            put_num(j, a, NULL, ljgap_units_len_to_si(&rq->mat, rq->x[i]), "si.g_ave_m", (long)i);
+            put_num(j, b, NULL, sigma[i].value * ljgap_units_sigma0(&rq->mat), "si.sigma_Pa",
+                    (long)i);
+        }
+        put_si_summary(j, put(j, si, "summary", cJSON_CreateObject()), &sum);
+    }
 end:
     free(sigma);
     return st;
@@ -313,7 +364,7 @@ static int run_pdf(job *j)
     ljgap_pdf *p = calloc(rq->nx, sizeof *p);
     ljgap_psd psd;
     ljgap_opts o;
-    cJSON *pdfs, *errs;
+    cJSON *pdfs, *errs, *si, *sip = NULL;
     int st = p ? prepare(j, &rq->psd, &psd, &o, &j->rq.warn) : LJGAP_ENOMEM;
     if (st) goto end;
     st = ljgap_pdf_compute(&psd, &o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL, p,
@@ -322,6 +373,23 @@ static int run_pdf(job *j)
     if (st) goto end;
     pdfs = put(j, j->ans, "pdfs", cJSON_CreateArray());
     errs = put(j, put(j, j->ans, "error", cJSON_CreateObject()), "pdfs", cJSON_CreateArray());
+    if ((si = put_si(j, j->ans, NULL))) sip = put(j, si, "pdfs", cJSON_CreateArray());
+    for (size_t i = 0; sip && i < rq->nx; i++) {
+        const ljgap_material *m = &rq->mat;
+        cJSON *s = put(j, sip, NULL, cJSON_CreateObject()), *g, *phi;
+        if (isinf(p[i].k2))
+            put(j, s, "k2_per_m", cJSON_CreateNull());
+        else
+            put_num(j, s, "k2_per_m", ljgap_units_k_to_si(m, p[i].k2), "si.pdfs.k2_per_m", (long)i);
+        g = put(j, s, "g_m", cJSON_CreateArray());
+        phi = put(j, s, "phi_per_m", cJSON_CreateArray());
+        for (size_t k = 0; g && phi && k < p[i].n; k++) {
+            put_num(j, g, NULL, ljgap_units_len_to_si(m, p[i].g[k]), "si.pdfs.g_m", (long)k);
+            put_num(j, phi, NULL, p[i].phi[k] / m->epsilon, "si.pdfs.phi_per_m", (long)k);
+        }
+        put_num(j, s, "sigma_Pa", p[i].sigma.value * ljgap_units_sigma0(m), "si.pdfs.sigma_Pa",
+                (long)i);
+    }
     for (size_t i = 0; pdfs && errs && i < rq->nx; i++) {
         cJSON *s = put(j, pdfs, NULL, cJSON_CreateObject());
         cJSON *e = put(j, errs, NULL, cJSON_CreateObject());
@@ -343,50 +411,147 @@ end:
     return st;
 }
 
+/* One sweep: every value is computed independently (by any thread), its result stored at
+ * its index, so the answer does not depend on the number of threads. */
+typedef struct {
+    job *j;             /* the request (read only while workers run) */
+    ljgap_summary *sum; /* nx results */
+    ljgap_warnings *w;  /* nx warning lists */
+    int *st;            /* nx statuses (-1: not computed) */
+    size_t next;        /* next index to take, under lock */
+    int stop;           /* a hard failure was seen, under lock: take no more values */
+    pthread_mutex_t lock;
+} sweep_work;
+
+static void *sweep_worker(void *arg)
+{
+    sweep_work *sw = arg;
+    job local = *sw->j; /* summarise may write local.fail; the request itself is only read */
+    const ljgap_request *rq = &sw->j->rq;
+    for (;;) {
+        ljgap_psd_spec spec;
+        size_t i;
+        pthread_mutex_lock(&sw->lock);
+        i = sw->stop ? rq->nx : sw->next++;
+        pthread_mutex_unlock(&sw->lock);
+        if (i >= rq->nx) return NULL;
+        ljgap_request_sweep_spec(rq, i, &spec);
+        sw->st[i] = summarise(&local, &spec, &sw->sum[i], &sw->w[i]);
+        if (sw->st[i] && sw->st[i] != LJGAP_EFAIL) {
+            pthread_mutex_lock(&sw->lock);
+            sw->stop = 1;
+            pthread_mutex_unlock(&sw->lock);
+        }
+    }
+}
+
+/* Runs the sweep's values on up to limits.sweep_threads threads (this one included). */
+static void sweep_compute(sweep_work *sw)
+{
+    long nt = limits.sweep_threads > 0 ? limits.sweep_threads : sysconf(_SC_NPROCESSORS_ONLN);
+    pthread_t th[64];
+    size_t started = 0;
+    if (nt < 1) nt = 1;
+    if (nt > 64) nt = 64;
+    if ((size_t)nt > sw->j->rq.nx) nt = (long)sw->j->rq.nx;
+    /* a thread that cannot be started leaves its share to the others */
+    while ((long)started + 1 < nt && pthread_create(&th[started], NULL, sweep_worker, sw) == 0)
+        started++;
+    sweep_worker(sw);
+    for (size_t t = 0; t < started; t++)
+        pthread_join(th[t], NULL);
+}
+
 /* One value of a sweep failed without a finite answer: its fields are null, and a warning
- * says why; the sweep goes on. Any other failure ends the sweep. */
+ * says why; the sweep goes on. Any other failure ends the sweep (the first such value is
+ * reported). */
 static int run_sweep(job *j)
 {
     ljgap_request *rq = &j->rq;
-    cJSON *results;
+    sweep_work sw = {.j = j};
+    cJSON *results, *si, *sir = NULL;
     size_t failed = 0;
+    int st = LJGAP_OK;
+    sw.sum = calloc(rq->nx, sizeof *sw.sum);
+    sw.w = calloc(rq->nx, sizeof *sw.w);
+    sw.st = malloc(rq->nx * sizeof *sw.st);
+    if (!sw.sum || !sw.w || !sw.st || pthread_mutex_init(&sw.lock, NULL)) {
+        st = LJGAP_ENOMEM;
+        goto end;
+    }
+    for (size_t i = 0; i < rq->nx; i++)
+        sw.st[i] = -1;
+    sweep_compute(&sw);
+    pthread_mutex_destroy(&sw.lock);
+    for (size_t i = 0; i < rq->nx; i++) {
+        for (int k = 0; k < sw.w[i].n; k++)
+            ljgap_warn(&rq->warn, "values[%zu]: %s", i, sw.w[i].msg[k]);
+        if (sw.st[i] > 0 && sw.st[i] != LJGAP_EFAIL) {
+            snprintf(j->fail, sizeof j->fail, " (at values[%zu] = %g)", i, rq->x[i]);
+            st = sw.st[i];
+            goto end;
+        }
+    }
     put(j, j->ans, "vary", cJSON_CreateString(rq->vary_name));
     put_nums(j, j->ans, "values", rq->x, rq->nx, sizeof *rq->x, "values");
     results = put(j, j->ans, "results", cJSON_CreateArray());
+    if ((si = put_si(j, j->ans, NULL))) sir = put(j, si, "results", cJSON_CreateArray());
     for (size_t i = 0; results && i < rq->nx; i++) {
-        ljgap_psd_spec spec = rq->psd;
-        ljgap_summary sum;
-        ljgap_warnings w = {0};
         cJSON *r = put(j, results, NULL, cJSON_CreateObject());
-        int st;
-        switch (rq->vary) {
-        case LJGAP_VARY_M0:
-            spec.level = LJGAP_LEVEL_M0, spec.level_val = rq->x[i];
-            break;
-        case LJGAP_VARY_C:
-            spec.level = LJGAP_LEVEL_C, spec.level_val = rq->x[i];
-            break;
-        case LJGAP_VARY_D:
-            spec.D = rq->x[i];
-            break;
-        case LJGAP_VARY_K1:
-            spec.k1 = rq->x[i];
-            break;
-        }
-        st = summarise(j, &spec, &sum, &w);
-        for (int k = 0; k < w.n; k++)
-            ljgap_warn(&rq->warn, "values[%zu]: %s", i, w.msg[k]);
-        if (st && st != LJGAP_EFAIL) {
-            snprintf(j->fail, sizeof j->fail, " (at values[%zu] = %g)", i, rq->x[i]);
-            return st;
-        }
-        if (st) failed++;
-        put_summary(j, r, r, "error", st ? NULL : &sum);
+        if (sw.st[i]) failed++;
+        put_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
+        if (sir && !sw.st[i])
+            put_si_summary(j, put(j, sir, NULL, cJSON_CreateObject()), &sw.sum[i]);
+        else if (sir)
+            put(j, sir, NULL, cJSON_CreateNull());
     }
     if (failed == rq->nx) {
         snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
-        return LJGAP_EFAIL;
+        st = LJGAP_EFAIL;
     }
+end:
+    free(sw.sum);
+    free(sw.w);
+    free(sw.st);
+    return st;
+}
+
+/* The hybrid JKR model (theory.md §6): the adhesion summary of the rough surface, then the
+ * sphere's pull-off forces from core/contact.c. */
+static int run_contact(job *j)
+{
+    ljgap_summary sum;
+    ljgap_contact c;
+    cJSON *po, *tab, *err, *epo;
+    int st = summarise(j, &j->rq.psd, &sum, &j->rq.warn);
+    if (st) return st;
+    if ((st = ljgap_contact_compute(&j->rq.mat, j->rq.R, &sum, &c))) {
+        snprintf(j->fail, sizeof j->fail,
+                 " (the contact model needs a positive sigma_max and dgamma_eff)");
+        return st == LJGAP_EINVAL ? LJGAP_EFAIL : st;
+    }
+    put_summary(j, j->ans, j->ans, "error", &sum);
+    err = cJSON_GetObjectItemCaseSensitive(j->ans, "error");
+    po = put(j, j->ans, "pull_off_N", cJSON_CreateObject());
+    epo = put(j, err, "pull_off_N", cJSON_CreateObject());
+    put_num(j, po, "jkr_smooth", c.jkr_smooth.value, "pull_off_N.jkr_smooth", -1);
+    put_num(j, po, "jkr", c.jkr.value, "pull_off_N.jkr", -1);
+    put_num(j, po, "dmt", c.dmt.value, "pull_off_N.dmt", -1);
+    put_num(j, po, "maugis_dugdale", c.md.value, "pull_off_N.maugis_dugdale", -1);
+    put_num(j, epo, "jkr_smooth", c.jkr_smooth.err, "error.pull_off_N.jkr_smooth", -1);
+    put_num(j, epo, "jkr", c.jkr.err, "error.pull_off_N.jkr", -1);
+    put_num(j, epo, "dmt", c.dmt.err, "error.pull_off_N.dmt", -1);
+    put_num(j, epo, "maugis_dugdale", c.md.err, "error.pull_off_N.maugis_dugdale", -1);
+    tab = put(j, j->ans, "tabor", cJSON_CreateObject());
+    put_num(j, tab, "smooth", c.tabor_smooth, "tabor.smooth", -1);
+    put_num(j, tab, "effective", c.tabor_eff.value, "tabor.effective", -1);
+    put_num(j, put(j, err, "tabor", cJSON_CreateObject()), "effective", c.tabor_eff.err,
+            "error.tabor.effective", -1);
+    put_num(j, j->ans, "maugis_lambda", c.lambda.value, "maugis_lambda", -1);
+    put_num(j, err, "maugis_lambda", c.lambda.err, "error.maugis_lambda", -1);
+    put(j, j->ans, "regime", cJSON_CreateString(ljgap_regime_name(c.regime)));
+    put_num(j, j->ans, "R", j->rq.R, "R", -1);
+    put_si(j, j->ans, &sum);
     return LJGAP_OK;
 }
 
@@ -403,6 +568,7 @@ static const route routes[] = {
     {"traction", LJGAP_EP_TRACTION, run_traction},
     {"pdf", LJGAP_EP_PDF, run_pdf},
     {"sweep", LJGAP_EP_SWEEP, run_sweep},
+    {"contact", LJGAP_EP_CONTACT, run_contact},
 };
 
 static const route *route_find(const char *name)
@@ -504,7 +670,7 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
     if (!r) {
         snprintf(detail, sizeof detail,
                  "no endpoint \"%.60s\": the endpoints are adhesion, "
-                 "traction, pdf and sweep",
+                 "traction, pdf, sweep and contact",
                  endpoint ? endpoint : "");
         reply_problem(out, &P_NOT_FOUND, detail, NULL);
         goto end;

@@ -18,9 +18,11 @@ typedef struct {
 
 /* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
 typedef struct {
-    double max_seconds;  /* wall-time cap of one computation (default 20) */
-    long max_samples;    /* montecarlo samples cap (default 1e6) */
-    long max_points;     /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
+    double max_seconds; /* wall-time cap of one computation (default 20) */
+    long max_samples;   /* montecarlo samples cap (default 1e6) */
+    long max_points;    /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
+    long sweep_threads; /* worker threads of one sweep (default, and when <= 0: the online
+                         * cores; 1 computes sequentially); results do not depend on it */
     const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
 } ljgap_limits;
 
@@ -28,7 +30,7 @@ void ljgap_limits_default(ljgap_limits *l);
 /* The limits used by ljgap_handle (defaults until set). Not thread-safe: call at start-up. */
 void ljgap_handler_set_limits(const ljgap_limits *l);
 
-/* Endpoint names: "adhesion", "traction", "pdf", "sweep" (later "contact").
+/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);

@@ -14,6 +14,14 @@
  * The rules of the model itself (theory.md §1): 2 < D < 3 for the quasi-fractal PSD (6),
  * k1 > k0 ≈ 0.46978 (below k0 the gap transfer (14) has a pole, the negative-stiffness
  * instability of (19)), k2 > k1, and positive finite levels.
+ *
+ * Physical units (api.md "Physical units", theory.md §1 and §6): a "material" block gives E*
+ * (directly, or from E1, ν1, E2, ν2 with 0 < E and -1 < ν <= 0.5), Δγ > 0 and ε > 0; with it,
+ * "units":"SI" says the psd object is in SI (k in 1/m, C in m^(2D-4), m0 in m², h_rms in m,
+ * table P in m⁴). The psd is converted here (core/units.c), before the k1 > k0 check, which
+ * is a statement about χk1. Only a power law's C waits: its conversion depends on D, which a
+ * sweep may vary, so ljgap_psd_from_spec converts it. Everything else (g_ave, grids, pdf
+ * cut-offs) stays dimensionless.
  */
 #include "request.h"
 
@@ -27,8 +35,11 @@
 #define SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
 #define PTR_LEN 96                  /* room for every pointer built from known names */
 
-static const char *const common_fields[] = {"psd",     "method", "tol", "vmax",
-                                            "samples", "seed",   NULL};
+static const char *const common_fields[] = {"psd",  "method",   "tol",   "vmax", "samples",
+                                            "seed", "material", "units", NULL};
+static const char *const contact_fields[] = {"R", NULL};
+static const char *const material_fields[] = {"E_star", "E1",     "nu1",     "E2",
+                                              "nu2",    "dgamma", "epsilon", NULL};
 static const char *const traction_fields[] = {"g_ave", NULL};
 static const char *const pdf_fields[] = {"g_ave", "k2", "grid", NULL};
 static const char *const sweep_fields[] = {"vary", "values", NULL};
@@ -105,11 +116,6 @@ static void only_fields(ljgap_verr *e, const cJSON *obj, const char *base, const
         }
         if (dup)
             ljgap_verr_add(e, ptr, "field \"%s\" appears more than once", it->string);
-        else if (strcmp(it->string, "material") == 0 || strcmp(it->string, "units") == 0)
-            ljgap_verr_add(e, ptr,
-                           "physical units (\"%s\") are not supported yet; give the "
-                           "dimensionless form (theory.md §1)",
-                           it->string);
         else
             ljgap_verr_add(e, ptr,
                            "unknown field \"%.60s\" (a typo? it is not part of this "
@@ -211,15 +217,20 @@ static const char *k0_why(void)
            "of (19); the theory needs k1 > k0";
 }
 
-/* A lower cut-off: positive, finite and above k0. */
-static int check_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double *k1)
+/* A lower cut-off: positive, finite and, times chi (1, or χ in m when given in 1/m), above k0.
+ * *k1 receives the dimensionless value. */
+static int check_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
 {
-    if (!num_pos(e, it, ptr, k1)) return 0;
-    if (!(*k1 > ljgap_k0())) {
+    double raw;
+    if (!num_pos(e, it, ptr, &raw)) return 0;
+    *k1 = raw * chi;
+    if (*k1 > ljgap_k0()) return 1;
+    if (chi == 1)
         ljgap_verr_add(e, ptr, "k1 = %g is at or below k0 = %.5f: %s", *k1, ljgap_k0(), k0_why());
-        return 0;
-    }
-    return 1;
+    else
+        ljgap_verr_add(e, ptr, "k1 = %g 1/m gives χk1 = %g (χ = %g m), at or below k0 = %.5f: %s",
+                       raw, *k1, chi, ljgap_k0(), k0_why());
+    return 0;
 }
 
 /* D (or 3 - H, when h is the given H) must lie in (2, 3). */
@@ -261,8 +272,9 @@ static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double 
     return ok;
 }
 
-/* Level field of a power law: exactly one of C, m0, h_rms. */
-static void parse_level(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+/* Level field of a power law: exactly one of C, m0, h_rms (in SI when mat is not NULL). */
+static void parse_level(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
+                        ljgap_psd_spec *s)
 {
     static const char *const names[] = {"C", "m0", "h_rms"};
     static const ljgap_level kinds[] = {LJGAP_LEVEL_C, LJGAP_LEVEL_M0, LJGAP_LEVEL_HRMS};
@@ -277,7 +289,15 @@ static void parse_level(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
             continue;
         }
         s->level = kinds[i];
-        num_pos(e, it, ptr, &s->level_val);
+        if (!num_pos(e, it, ptr, &s->level_val) || !mat) continue;
+        if (s->level == LJGAP_LEVEL_C) {
+            s->c_si = 1;
+            s->mat = *mat;
+        } else if (s->level == LJGAP_LEVEL_M0) {
+            s->level_val = ljgap_units_var_to_dimless(mat, s->level_val);
+        } else {
+            s->level_val = ljgap_units_len_to_dimless(mat, s->level_val);
+        }
     }
     if (!found)
         ljgap_verr_add(e, "/psd",
@@ -285,9 +305,11 @@ static void parse_level(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
                        "h_rms (= √m0)");
 }
 
-static void parse_power(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
+                        ljgap_psd_spec *s)
 {
     const cJSON *D = member(psd, "D"), *H = member(psd, "H"), *k1, *k2;
+    double chi = mat ? ljgap_units_chi(mat) : 1;
     int k1_ok;
     only_fields(e, psd, "/psd", power_fields, NULL);
     if (D && H) {
@@ -301,17 +323,19 @@ static void parse_power(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
         ljgap_verr_add(e, "/psd/D", "missing required field \"D\" (or H = 3 - D)");
     }
     k1 = required(e, psd, "/psd", "k1", "the lowest wavenumber of the PSD");
-    k1_ok = k1 && check_k1(e, k1, "/psd/k1", &s->k1);
+    k1_ok = k1 && check_k1(e, k1, "/psd/k1", chi, &s->k1);
     if (!k1_ok) s->k1 = NAN; /* so later checks against k1 do not pile up */
     k2 = member(psd, "k2");
     s->k2 = INFINITY;
     if (k2 && !cJSON_IsNull(k2)) {
         if (!num_pos(e, k2, "/psd/k2", &s->k2))
             s->k2 = NAN;
-        else if (k1_ok && !(s->k2 > s->k1))
-            ljgap_verr_add(e, "/psd/k2", "k2 = %g must be greater than k1 = %g", s->k2, s->k1);
+        else if (k1_ok && !(s->k2 * chi > s->k1))
+            ljgap_verr_add(e, "/psd/k2", "k2 = %g must be greater than k1 = %g", s->k2,
+                           s->k1 / chi);
+        s->k2 *= chi;
     }
-    parse_level(e, psd, s);
+    parse_level(e, psd, mat, s);
 }
 
 /* Numbers of a table column (pointer base) into a new array of n entries. */
@@ -334,7 +358,8 @@ static double *table_column(ljgap_verr *e, const cJSON *arr, const char *base, s
     return x;
 }
 
-static void parse_table(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
+static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
+                        ljgap_psd_spec *s)
 {
     const cJSON *k, *P, *tail;
     size_t nk = 0, nP = 0;
@@ -350,6 +375,10 @@ static void parse_table(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
         s->k = table_column(e, k, "/psd/k", nk);
         s->P = table_column(e, P, "/psd/P", nk);
         s->n = nk;
+        for (size_t i = 0; mat && s->k && s->P && i < nk; i++) {
+            s->k[i] = ljgap_units_k_to_dimless(mat, s->k[i]);
+            s->P[i] = ljgap_units_P_to_dimless(mat, s->P[i]);
+        }
         for (size_t i = 1; s->k && i < nk; i++) {
             snprintf(ptr, sizeof ptr, "/psd/k/%zu", i);
             if (isfinite(s->k[i]) && isfinite(s->k[i - 1]) && !(s->k[i] > s->k[i - 1]))
@@ -380,7 +409,8 @@ static void parse_table(ljgap_verr *e, const cJSON *psd, ljgap_psd_spec *s)
     }
 }
 
-static void parse_psd(ljgap_verr *e, const cJSON *root, ljgap_psd_spec *s)
+static void parse_psd(ljgap_verr *e, const cJSON *root, const ljgap_material *mat,
+                      ljgap_psd_spec *s)
 {
     static const char *const kinds[] = {"power", "table", NULL};
     const cJSON *psd = required(e, root, "", "psd", "the surface's power spectral density");
@@ -395,13 +425,110 @@ static void parse_psd(ljgap_verr *e, const cJSON *root, ljgap_psd_spec *s)
     switch (pick(e, kind, "/psd/kind", kinds, "kind", "\"power\" or \"table\"")) {
     case 0:
         s->kind = LJGAP_PSD_POWER;
-        parse_power(e, psd, s);
+        parse_power(e, psd, mat, s);
         break;
     case 1:
         s->kind = LJGAP_PSD_TABLE;
-        parse_table(e, psd, s);
+        parse_table(e, psd, mat, s);
         break;
     }
+}
+
+/* A Poisson ratio in (-1, 0.5] at obj[name] (pointer /material/name). */
+static int poisson(ljgap_verr *e, const cJSON *obj, const char *name, double *nu)
+{
+    char ptr[PTR_LEN];
+    const cJSON *it = required(e, obj, "/material", name, "Poisson's ratio, -1 < ν <= 0.5");
+    snprintf(ptr, sizeof ptr, "/material/%s", name);
+    if (!it || !num(e, it, ptr, nu)) return 0;
+    if (*nu > -1 && *nu <= 0.5) return 1;
+    ljgap_verr_add(e, ptr, "ν = %g is outside (-1, 0.5], where an isotropic solid is stable", *nu);
+    return 0;
+}
+
+/* A positive number at obj[name] (pointer /material/name), recording "missing" if absent. */
+static int positive(ljgap_verr *e, const cJSON *obj, const char *name, const char *what, double *x)
+{
+    char ptr[PTR_LEN];
+    const cJSON *it = required(e, obj, "/material", name, what);
+    snprintf(ptr, sizeof ptr, "/material/%s", name);
+    return it && num_pos(e, it, ptr, x);
+}
+
+/* The material block (required when need): E* directly or from two bodies, Δγ, ε. */
+static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq)
+{
+    static const char *const pair[] = {"E1", "nu1", "E2", "nu2"};
+    const cJSON *m = member(root, "material"), *Es;
+    double E = NAN, E1 = NAN, E2 = NAN, nu1 = NAN, nu2 = NAN, dg = NAN, eps = NAN;
+    int ok = 1;
+    if (!m) {
+        if (need)
+            ljgap_verr_add(e, "/material",
+                           "missing required field \"material\" ({\"E_star\"} or {\"E1\", "
+                           "\"nu1\", \"E2\", \"nu2\"}, with \"dgamma\" and \"epsilon\"; SI)");
+        return;
+    }
+    if (!cJSON_IsObject(m)) {
+        ljgap_verr_add(e, "/material", "must be an object {\"E_star\", \"dgamma\", \"epsilon\"}");
+        return;
+    }
+    only_fields(e, m, "/material", material_fields, NULL);
+    if ((Es = member(m, "E_star"))) {
+        for (int i = 0; i < 4; i++) {
+            char ptr[PTR_LEN];
+            if (!member(m, pair[i])) continue;
+            snprintf(ptr, sizeof ptr, "/material/%s", pair[i]);
+            ljgap_verr_add(e, ptr, "give E_star or E1, nu1, E2, nu2, not both");
+            ok = 0;
+        }
+        ok &= num_pos(e, Es, "/material/E_star", &E);
+    } else if (!member(m, "E1") && !member(m, "E2") && !member(m, "nu1") && !member(m, "nu2")) {
+        ljgap_verr_add(e, "/material/E_star",
+                       "missing the modulus: give E_star (Pa) or E1, nu1, E2, nu2 "
+                       "(1/E* = (1-ν1²)/E1 + (1-ν2²)/E2)");
+        ok = 0;
+    } else {
+        ok &= positive(e, m, "E1", "Young's modulus of body 1, Pa", &E1);
+        ok &= poisson(e, m, "nu1", &nu1);
+        ok &= positive(e, m, "E2", "Young's modulus of body 2, Pa", &E2);
+        ok &= poisson(e, m, "nu2", &nu2);
+        if (ok && ljgap_units_E_star(E1, nu1, E2, nu2, &E) != LJGAP_OK) {
+            ljgap_verr_add(e, "/material",
+                           "E* = 1/((1-ν1²)/E1 + (1-ν2²)/E2) is not a finite "
+                           "positive number");
+            ok = 0;
+        }
+    }
+    ok &= positive(e, m, "dgamma", "work of adhesion Δγ of the flat surfaces, J/m²", &dg);
+    ok &= positive(e, m, "epsilon", "Lennard-Jones length ε, m", &eps);
+    if (!ok) return;
+    if (ljgap_material_set(&rq->mat, E, dg, eps) != LJGAP_OK ||
+        !(isfinite(ljgap_units_chi(&rq->mat)) && ljgap_units_chi(&rq->mat) > 0 &&
+          isfinite(ljgap_units_sigma0(&rq->mat)) && ljgap_units_sigma0(&rq->mat) > 0)) {
+        ljgap_verr_add(e, "/material",
+                       "the scales χ = 3ε²E* /(16Δγ) and σ0 = 16Δγ/(9√3ε) "
+                       "are not finite positive numbers");
+        return;
+    }
+    rq->has_material = 1;
+}
+
+/* "units": absent or "dimensionless" (0), "SI" (1, needs material), -1 after a problem. */
+static int parse_units(ljgap_verr *e, const cJSON *root)
+{
+    static const char *const names[] = {"dimensionless", "SI", NULL};
+    const cJSON *u = member(root, "units");
+    int i;
+    if (!u) return 0;
+    i = pick(e, u, "/units", names, "units", "\"SI\" or \"dimensionless\"");
+    if (i == 1 && !member(root, "material")) {
+        ljgap_verr_add(e, "/units",
+                       "\"units\":\"SI\" needs a \"material\" block (E*, Δγ, ε "
+                       "set the scales)");
+        return -1;
+    }
+    return i;
 }
 
 static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
@@ -538,6 +665,7 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
     const cJSON *it;
     size_t i = 0;
     char ptr[PTR_LEN];
+    double chi = rq->si_psd ? ljgap_units_chi(&rq->mat) : 1, kt;
     int k = v ? pick(e, v, "/vary", names, "field to vary", "\"m0\", \"C\", \"D\" or \"k1\"") : -1;
     int vary_ok = k >= 0;
     if (rq->psd.kind == LJGAP_PSD_TABLE)
@@ -556,8 +684,11 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
         } else if (rq->vary == LJGAP_VARY_D) {
             if (num(e, it, ptr, x)) check_D(e, ptr, *x, NULL);
         } else if (rq->vary == LJGAP_VARY_K1) {
-            if (check_k1(e, it, ptr, x) && !isnan(rq->psd.k2) && !(*x < rq->psd.k2))
-                ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x, rq->psd.k2);
+            /* x keeps the value as given; ljgap_request_sweep_spec converts it */
+            if (check_k1(e, it, ptr, chi, &kt) && (*x = it->valuedouble, 1) && !isnan(rq->psd.k2) &&
+                !(kt < rq->psd.k2))
+                ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x,
+                               rq->psd.k2 / chi);
         } else {
             num_pos(e, it, ptr, x);
         }
@@ -567,7 +698,10 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
 int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq, ljgap_verr *e)
 {
-    static const char *const *const extra[] = {NULL, traction_fields, pdf_fields, sweep_fields};
+    static const char *const *const extra[] = {NULL, traction_fields, pdf_fields, sweep_fields,
+                                               contact_fields};
+    const cJSON *R;
+    int si;
     memset(rq, 0, sizeof *rq);
     rq->ep = ep;
     ljgap_opts_default(&rq->opts);
@@ -580,7 +714,13 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     }
     only_fields(e, root, "", common_fields, extra[ep]);
     parse_common(e, root, lim, rq);
-    parse_psd(e, root, &rq->psd);
+    parse_material(e, root, ep == LJGAP_EP_CONTACT, rq);
+    si = parse_units(e, root);
+    /* an SI psd cannot be checked without a valid material: its problems come first */
+    if (si == 0 || (si == 1 && rq->has_material)) {
+        rq->si_psd = si;
+        parse_psd(e, root, si ? &rq->mat : NULL, &rq->psd);
+    }
     switch (ep) {
     case LJGAP_EP_ADHESION:
         break;
@@ -592,6 +732,9 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
         break;
     case LJGAP_EP_SWEEP:
         parse_sweep(e, root, lim, rq);
+        break;
+    case LJGAP_EP_CONTACT:
+        if ((R = required(e, root, "", "R", "the sphere's radius, m"))) num_pos(e, R, "/R", &rq->R);
         break;
     }
     return e->n;
@@ -610,5 +753,32 @@ int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)
 {
     if (s->kind == LJGAP_PSD_TABLE)
         return ljgap_psd_table(psd, s->k, s->P, s->n, s->has_tail, s->tail_q);
+    if (s->level == LJGAP_LEVEL_C && s->c_si)
+        return ljgap_psd_power(psd, s->D, s->k1, s->k2, s->level,
+                               ljgap_units_C_to_dimless(&s->mat, s->level_val, s->D));
     return ljgap_psd_power(psd, s->D, s->k1, s->k2, s->level, s->level_val);
+}
+
+void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec)
+{
+    const ljgap_material *mat = rq->si_psd ? &rq->mat : NULL;
+    double x = rq->x[i];
+    *spec = rq->psd;
+    switch (rq->vary) {
+    case LJGAP_VARY_M0:
+        spec->level = LJGAP_LEVEL_M0, spec->c_si = 0;
+        spec->level_val = mat ? ljgap_units_var_to_dimless(mat, x) : x;
+        break;
+    case LJGAP_VARY_C:
+        spec->level = LJGAP_LEVEL_C, spec->level_val = x;
+        spec->c_si = mat != NULL;
+        if (mat) spec->mat = *mat;
+        break;
+    case LJGAP_VARY_D:
+        spec->D = x;
+        break;
+    case LJGAP_VARY_K1:
+        spec->k1 = mat ? ljgap_units_k_to_dimless(mat, x) : x;
+        break;
+    }
 }

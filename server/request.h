@@ -12,11 +12,18 @@
 
 #include "handler.h"
 #include "ljgap.h"
+#include "ljgap_units.h"
 
 #include <cjson/cJSON.h>
 
 /* The endpoints the handler computes. */
-typedef enum { LJGAP_EP_ADHESION, LJGAP_EP_TRACTION, LJGAP_EP_PDF, LJGAP_EP_SWEEP } ljgap_endpoint;
+typedef enum {
+    LJGAP_EP_ADHESION,
+    LJGAP_EP_TRACTION,
+    LJGAP_EP_PDF,
+    LJGAP_EP_SWEEP,
+    LJGAP_EP_CONTACT
+} ljgap_endpoint;
 
 /* Which PSD field a sweep varies. */
 typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1 } ljgap_vary;
@@ -24,15 +31,18 @@ typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1 } ljgap_
 /* The psd object as given (not yet built: a sweep builds one PSD per value). */
 typedef struct {
     ljgap_psd_kind kind;
-    double D;          /* power: fractal dimension (from D or 3 - H) */
-    double k1;         /* power: lower cut-off */
-    double k2;         /* power: upper cut-off, INFINITY when absent or null */
-    ljgap_level level; /* power: which field set the level */
-    double level_val;  /* power: its value */
-    size_t n;          /* table: number of points */
-    double *k, *P;     /* table: owned, n entries each */
-    int has_tail;      /* table: tail given */
-    double tail_q;     /* table: tail exponent */
+    double D;           /* power: fractal dimension (from D or 3 - H) */
+    double k1;          /* power: lower cut-off */
+    double k2;          /* power: upper cut-off, INFINITY when absent or null */
+    ljgap_level level;  /* power: which field set the level */
+    double level_val;   /* power: its value */
+    size_t n;           /* table: number of points */
+    double *k, *P;      /* table: owned, n entries each */
+    int has_tail;       /* table: tail given */
+    double tail_q;      /* table: tail exponent */
+    int c_si;           /* power: level C is in SI (m^(2D-4)); converted with D and mat when
+                         * the PSD is built (a sweep over D changes the conversion) */
+    ljgap_material mat; /* the material, when c_si */
 } ljgap_psd_spec;
 
 typedef struct {
@@ -41,13 +51,18 @@ typedef struct {
     const char *method;    /* contract name of opts.method (static string) */
     ljgap_psd_spec psd;    /* the psd object */
     double *x;             /* owned: traction g_ave points, pdf k2 cut-offs (INFINITY for
-                            * null), or sweep values */
+                            * null), or sweep values (as given: SI when si_psd; see
+                            * ljgap_request_sweep_spec) */
     size_t nx;             /* entries in x */
     double g_ave;          /* pdf: the mean gap */
     int has_grid;          /* pdf: grid given */
     double grid[3];        /* pdf: {min, max, n} */
     ljgap_vary vary;       /* sweep: which field */
     const char *vary_name; /* sweep: its contract name (static string) */
+    int has_material;      /* a material block was given: answers add "si" */
+    ljgap_material mat;    /* the material (SI), when has_material */
+    int si_psd;            /* "units":"SI": the psd object was given in SI (now converted) */
+    double R;              /* contact: sphere radius (m) */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
 } ljgap_request;
 
@@ -69,6 +84,8 @@ void ljgap_request_free(ljgap_request *rq);
 
 /* Builds the PSD a spec describes (ljgap_psd_power / ljgap_psd_table status). */
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);
+/* The PSD spec of sweep value i (rq->x[i] placed in the varied field, in core units). */
+void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec);
 
 /* Records one problem at pointer ptr (printf-style detail). */
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)

@@ -98,3 +98,32 @@ check "sweep exits 0" rc_is 0
 check "sweep answers one result per value" jq_true \
     '.vary == "m0" and (.results | length) == 2 and (.results[1].m0 == 0.02)
      and (.results[0].error.g_eq >= 0)'
+
+mat='"material":{"E1":2e9,"nu1":0.5,"E2":2e9,"nu2":0.5,"dgamma":0.05,"epsilon":3e-10}'
+echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":0.5},$mat,\"R\":1e-6,\"tol\":1e-4}" >"$tmp/in"
+run contact
+check "contact exits 0" rc_is 0
+check "contact answers pull-off forces, Tabor, lambda, regime" jq_true \
+    '(.pull_off_N | [.jkr_smooth,.jkr,.dmt,.maugis_dugdale] | all(type == "number" and . > 0))
+     and .pull_off_N.jkr <= .pull_off_N.maugis_dugdale
+     and .pull_off_N.maugis_dugdale <= .pull_off_N.dmt
+     and (.tabor.smooth > 0) and (.tabor.effective > 0) and (.maugis_lambda > 0)
+     and (.regime | IN("jkr","transition","dmt")) and (.error.pull_off_N.maugis_dugdale >= 0)'
+check "contact answers si scales" jq_true \
+    '.si.chi_m > 0 and .si.sigma0_Pa > 0 and (.si.g_eq_m - .g_eq * 3e-10 | fabs) < 1e-20
+     and (.si.dgamma_eff_J_m2 - .dgamma_eff * 0.05 | fabs) < 1e-15'
+
+echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":0.5},\"R\":1e-6}" >"$tmp/in"
+run contact
+check "contact without material is a 422 at /material" jq_true \
+    '.status == 422 and [.errors[].pointer] == ["/material"]'
+
+echo "{\"psd\":$psd,\"units\":\"SI\"}" >"$tmp/in"
+run adhesion
+check "SI units without material is a 422 at /units" jq_true \
+    '.status == 422 and [.errors[].pointer] == ["/units"]'
+
+echo "{\"psd\":$psd,\"material\":{\"E_star\":1e9,\"dgamma\":-1,\"epsilon\":3e-10}}" >"$tmp/in"
+run adhesion
+check "negative dgamma is a 422 at /material/dgamma" jq_true \
+    '.status == 422 and [.errors[].pointer] == ["/material/dgamma"]'

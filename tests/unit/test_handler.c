@@ -29,6 +29,14 @@
 
 #define PSD "{'kind':'power','D':2.5,'k1':1,'k2':8,'m0':0.5}"
 #define PSD_INF "{'kind':'power','D':2.5,'k1':1,'m0':0.5}"
+/* E* = 1 GPa, Δγ = 50 mJ/m², ε = 0.3 nm: χ = 3ε²E* /(16Δγ) = 3.375e-10 m */
+#define DG_EPS "'dgamma':0.05,'epsilon':3e-10"
+#define MAT "'material':{'E_star':1e9," DG_EPS "}"
+#define CHI 3.375e-10
+/* PSD in SI: k1 = 1/χ, k2 = 8/χ (1/m), h_rms = √0.5 ε (m): the dimensionless PSD */
+#define PSD_SI                                                                                     \
+    "{'kind':'power','D':2.5,'k1':2962962962.962963,'k2':23703703703.703704,"                      \
+    "'h_rms':2.1213203435596424e-10}"
 
 /* The answer of one request: status, content type and the parsed body. */
 typedef struct {
@@ -193,6 +201,43 @@ static const rule rules[] = {
     {"sweep_k1_below_k0", "sweep", WITH("'vary':'k1','values':[2,0.3]"), "/values/1"},
     {"sweep_m0_zero", "sweep", WITH("'vary':'m0','values':[0.1,0]"), "/values/1"},
     {"sweep_values_empty", "sweep", WITH("'vary':'m0','values':[]"), "/values"},
+    /* physical units */
+    {"material_E_star_zero", "adhesion", WITH("'material':{'E_star':0," DG_EPS "}"),
+     "/material/E_star"},
+    {"material_E1_negative", "adhesion",
+     WITH("'material':{'E1':-1e9,'nu1':0.3,'E2':1e9,'nu2':0.3," DG_EPS "}"), "/material/E1"},
+    {"material_E2_zero", "adhesion",
+     WITH("'material':{'E1':1e9,'nu1':0.3,'E2':0,'nu2':0.3," DG_EPS "}"), "/material/E2"},
+    {"material_nu_above_half", "adhesion",
+     WITH("'material':{'E1':1e9,'nu1':0.3,'E2':1e9,'nu2':0.51," DG_EPS "}"), "/material/nu2"},
+    {"material_nu_minus_one", "adhesion",
+     WITH("'material':{'E1':1e9,'nu1':-1,'E2':1e9,'nu2':0.3," DG_EPS "}"), "/material/nu1"},
+    {"material_nu_missing", "adhesion", WITH("'material':{'E1':1e9,'nu1':0.3,'E2':1e9," DG_EPS "}"),
+     "/material/nu2"},
+    {"material_both_moduli", "adhesion", WITH("'material':{'E_star':1e9,'E1':1e9," DG_EPS "}"),
+     "/material/E1"},
+    {"material_no_modulus", "adhesion", WITH("'material':{" DG_EPS "}"), "/material/E_star"},
+    {"material_dgamma_zero", "adhesion",
+     WITH("'material':{'E_star':1e9,'dgamma':0,'epsilon':3e-10}"), "/material/dgamma"},
+    {"material_epsilon_negative", "adhesion",
+     WITH("'material':{'E_star':1e9,'dgamma':0.05,'epsilon':-3e-10}"), "/material/epsilon"},
+    {"material_epsilon_missing", "adhesion", WITH("'material':{'E_star':1e9,'dgamma':0.05}"),
+     "/material/epsilon"},
+    {"material_dgamma_missing", "adhesion", WITH("'material':{'E_star':1e9,'epsilon':3e-10}"),
+     "/material/dgamma"},
+    {"material_unknown_field", "adhesion", WITH("'material':{'E':1e9,'E_star':1e9," DG_EPS "}"),
+     "/material/E"},
+    {"material_not_object", "adhesion", WITH("'material':1e9"), "/material"},
+    {"units_SI_without_material", "adhesion", WITH("'units':'SI'"), "/units"},
+    {"units_unknown", "adhesion", WITH("'units':'cgs'," MAT), "/units"},
+    {"si_k1_below_k0", "adhesion",
+     "{'psd':{'kind':'power','D':2.5,'k1':1e9,'h_rms':1e-10},'units':'SI'," MAT "}", "/psd/k1"},
+    {"si_sweep_k1_below_k0", "sweep",
+     "{'psd':" PSD_SI ",'units':'SI'," MAT ",'vary':'k1','values':[1e9]}", "/values/0"},
+    {"contact_needs_material", "contact", WITH("'R':1e-6"), "/material"},
+    {"contact_R_missing", "contact", WITH(MAT), "/R"},
+    {"contact_R_zero", "contact", WITH(MAT ",'R':0"), "/R"},
+    {"contact_R_string", "contact", WITH(MAT ",'R':'1um'"), "/R"},
 };
 
 static void rule_test(void **state)
@@ -311,7 +356,7 @@ static void unknown_endpoint(void **state)
     cJSON_Delete(a.body);
     assert_true(ljgap_handler_has("adhesion"));
     assert_true(ljgap_handler_has("sweep"));
-    assert_false(ljgap_handler_has("contact"));
+    assert_true(ljgap_handler_has("contact"));
     assert_false(ljgap_handler_has(NULL));
 }
 
@@ -564,6 +609,162 @@ static void ignored_field_warns(void **state)
     cJSON_Delete(a.body);
 }
 
+/* ---- physical units and contact ---- */
+
+/* The same PSD given dimensionless and in SI (k/χ, h_rms ε, C of (6) in SI, table in SI)
+ * gives the same answer; the si object converts it back. */
+static void si_matches_dimensionless(void **state)
+{
+    char req[600];
+    const double eps = 3e-10, s0 = 16 * 0.05 / (9 * sqrt(3) * eps), D = 2.5;
+    const double C = 0.5 * (2 * D - 6) / (2 * M_PI * (pow(8, 2 * D - 6) - 1)); /* m0 = 0.5 */
+    answer a = ask("adhesion", "{'psd':" PSD ",'tol':1e-5}");
+    answer b = ask("adhesion", "{'psd':" PSD_SI ",'units':'SI'," MAT ",'tol':1e-5}");
+    const cJSON *si = get(b.body, "si");
+    answer c, t;
+    check_meta(&b, "pde");
+    for (int i = 0; i < 4; i++)
+        near(num(b.body, summary_fields[i]), num(a.body, summary_fields[i]),
+             1e-9 * fabs(num(a.body, summary_fields[i])), summary_fields[i]);
+    near(num(si, "chi_m"), CHI, 1e-15 * CHI, "chi_m");
+    near(num(si, "sigma0_Pa"), s0, 1e-15 * s0, "sigma0_Pa");
+    near(num(si, "g_eq_m"), num(b.body, "g_eq") * eps, 1e-15 * eps, "g_eq_m");
+    near(num(si, "sigma_max_Pa"), num(b.body, "sigma_max") * s0, 1e-15 * s0, "sigma_max_Pa");
+    near(num(si, "dgamma_eff_J_m2"), num(b.body, "dgamma_eff") * 0.05, 1e-16, "dgamma_eff");
+    near(num(si, "m0_m2"), 0.5 * eps * eps, 1e-12 * eps * eps, "m0_m2");
+    /* C in SI: C_SI = C̃ ε²/χ^(6-2D) */
+    snprintf(req, sizeof req,
+             "{'psd':{'kind':'power','D':2.5,'k1':%.17g,'k2':%.17g,'C':%.17g},'units':'SI'," MAT
+             ",'tol':1e-5}",
+             1 / CHI, 8 / CHI, C * eps * eps / pow(CHI, 6 - 2 * D));
+    c = ask("adhesion", req);
+    check_meta(&c, "pde");
+    near(num(c.body, "m0"), 0.5, 1e-12, "m0 from C_SI");
+    near(num(c.body, "g_eq"), num(a.body, "g_eq"), 1e-9, "g_eq from C_SI");
+    /* a table in SI: k/χ, P ε²χ² */
+    snprintf(req, sizeof req,
+             "{'psd':{'kind':'table','k':[%.17g,%.17g],'P':[%.17g,%.17g]},'units':'SI'," MAT
+             ",'tol':1e-4}",
+             1 / CHI, 8 / CHI, C * eps * eps * CHI * CHI,
+             C * pow(8, 2 * D - 8) * eps * eps * CHI * CHI);
+    t = ask("adhesion", req);
+    check_meta(&t, "pde");
+    near(num(t.body, "m0"), 0.5, 1e-9, "m0 of the SI table");
+    cJSON_Delete(a.body);
+    cJSON_Delete(b.body);
+    cJSON_Delete(c.body);
+    cJSON_Delete(t.body);
+}
+
+/* Traction and pdf answers carry their arrays in SI too; a dimensionless psd with a
+ * material is fine. */
+static void si_arrays(void **state)
+{
+    answer t = ask("traction", "{'psd':" PSD "," MAT ",'g_ave':[1.5,3],'tol':1e-4}");
+    answer p = ask("pdf", "{'psd':" PSD_INF "," MAT ",'g_ave':1.5,'k2':[5],'tol':1e-3}");
+    const cJSON *si = get(t.body, "si"), *pp;
+    const double s0 = 16 * 0.05 / (9 * sqrt(3) * 3e-10);
+    check_meta(&t, "pde");
+    check_meta(&p, "pde");
+    near(cJSON_GetArrayItem(get(si, "g_ave_m"), 1)->valuedouble, 9e-10, 1e-24, "g_ave_m");
+    near(cJSON_GetArrayItem(get(si, "sigma_Pa"), 1)->valuedouble,
+         cJSON_GetArrayItem(get(t.body, "sigma"), 1)->valuedouble * s0, 1e-6, "sigma_Pa");
+    near(num(get(si, "summary"), "g_eq_m"), num(get(t.body, "summary"), "g_eq") * 3e-10, 1e-24,
+         "summary.g_eq_m");
+    pp = cJSON_GetArrayItem(get(get(p.body, "si"), "pdfs"), 0);
+    near(num(pp, "k2_per_m"), 5 / CHI, 1e-6 * 5 / CHI, "k2_per_m");
+    assert_int_equal(cJSON_GetArraySize(get(pp, "g_m")),
+                     cJSON_GetArraySize(get(cJSON_GetArrayItem(get(p.body, "pdfs"), 0), "g")));
+    cJSON_Delete(t.body);
+    cJSON_Delete(p.body);
+}
+
+static void contact_answer(void **state)
+{
+    answer a = ask("contact", "{'psd':" PSD_INF ",'material':{'E1':2e9,'nu1':0.5,'E2':2e9,"
+                              "'nu2':0.5," DG_EPS "},'R':1e-6,'tol':1e-4}");
+    const cJSON *po, *err, *epo;
+    const double R = 1e-6, dg = 0.05;
+    double d, lam;
+    check_meta(&a, "pde");
+    check_summary(a.body, get(a.body, "error"));
+    near(num(get(a.body, "si"), "E_star_Pa"), 2e9 / 1.5, 1e-3, "E* of two bodies");
+    po = get(a.body, "pull_off_N");
+    err = get(a.body, "error");
+    epo = get(err, "pull_off_N");
+    d = num(a.body, "dgamma_eff");
+    near(num(po, "jkr_smooth"), 1.5 * M_PI * R * dg, 1e-20, "jkr_smooth");
+    near(num(po, "jkr"), 1.5 * M_PI * R * dg * d, 1e-20, "jkr");
+    near(num(po, "dmt"), 2 * M_PI * R * dg * d, 1e-20, "dmt");
+    near(num(epo, "jkr"), 1.5 * M_PI * R * dg * num(err, "dgamma_eff"), 1e-22, "error.jkr");
+    assert_true(num(po, "maugis_dugdale") >= num(po, "jkr") &&
+                num(po, "maugis_dugdale") <= num(po, "dmt"));
+    assert_true(num(epo, "maugis_dugdale") >= 0);
+    assert_true(num(get(a.body, "tabor"), "smooth") > 0);
+    assert_true(num(get(a.body, "tabor"), "effective") > 0);
+    lam = num(a.body, "maugis_lambda");
+    assert_string_equal(str(a.body, "regime"), lam > 5 ? "jkr" : lam < 0.1 ? "dmt" : "transition");
+    assert_true(num(err, "maugis_lambda") >= 0);
+    cJSON_Delete(a.body);
+}
+
+/* Fig. 5: at equal m0 the rougher spectrum (larger D) keeps less adhesion, and both tend
+ * to the flat values as m0 -> 0. */
+static void fig5_trends(void **state)
+{
+    answer a = ask("sweep", "{'psd':{'kind':'power','D':2.05,'k1':0.5,'m0':1},'tol':1e-4,"
+                            "'vary':'m0','values':[1e-4,0.1,1,10]}");
+    answer b = ask("sweep", "{'psd':{'kind':'power','D':2.5,'k1':0.5,'m0':1},'tol':1e-4,"
+                            "'vary':'m0','values':[1e-4,0.1,1,10]}");
+    const cJSON *ra = get(a.body, "results"), *rb = get(b.body, "results");
+    check_meta(&a, "pde");
+    check_meta(&b, "pde");
+    for (int i = 0; i < 4; i++) {
+        const cJSON *x = cJSON_GetArrayItem(ra, i), *y = cJSON_GetArrayItem(rb, i);
+        if (i == 0) {
+            near(num(x, "dgamma_eff"), 1, 1e-3, "D=2.05 dgamma_eff at m0=1e-4");
+            near(num(y, "dgamma_eff"), 1, 1e-3, "D=2.5 dgamma_eff at m0=1e-4");
+            near(num(x, "sigma_max"), 1, 1e-3, "D=2.05 sigma_max at m0=1e-4");
+            near(num(y, "sigma_max"), 1, 1e-3, "D=2.5 sigma_max at m0=1e-4");
+            continue;
+        }
+        if (!(num(y, "dgamma_eff") < num(x, "dgamma_eff") &&
+              num(y, "sigma_max") < num(x, "sigma_max")))
+            fail_msg("m0 index %d: D=2.5 gives %.17g, %.17g; D=2.05 gives %.17g, %.17g", i,
+                     num(y, "dgamma_eff"), num(y, "sigma_max"), num(x, "dgamma_eff"),
+                     num(x, "sigma_max"));
+    }
+    cJSON_Delete(a.body);
+    cJSON_Delete(b.body);
+}
+
+/* A sweep on several threads answers exactly what the sequential one does, in SI too. */
+static void sweep_threads_agree(void **state)
+{
+    const char *req = "{'psd':" PSD_SI ",'units':'SI'," MAT ",'tol':1e-3,'vary':'D',"
+                      "'values':[2.2,2.4,2.6,2.8]}";
+    char *out[2];
+    for (int k = 0; k < 2; k++) {
+        ljgap_limits l;
+        answer a;
+        ljgap_limits_default(&l);
+        l.sweep_threads = k ? 4 : 1;
+        ljgap_handler_set_limits(&l);
+        a = ask("sweep", req);
+        check_meta(&a, "pde");
+        assert_int_equal(cJSON_GetArraySize(get(get(a.body, "si"), "results")), 4);
+        cJSON_DeleteItemFromObjectCaseSensitive(a.body, "meta");
+        out[k] = cJSON_PrintUnformatted(a.body);
+        cJSON_Delete(a.body);
+    }
+    ljgap_limits l;
+    ljgap_limits_default(&l);
+    ljgap_handler_set_limits(&l);
+    assert_string_equal(out[0], out[1]);
+    free(out[0]);
+    free(out[1]);
+}
+
 /* ---- thread safety ---- */
 
 #define N_THREADS 4
@@ -632,6 +833,11 @@ int main(void)
         cmocka_unit_test(sweep_k1_keeps_level),
         cmocka_unit_test(ignored_field_warns),
         cmocka_unit_test(concurrent_answers_agree),
+        cmocka_unit_test(si_matches_dimensionless),
+        cmocka_unit_test(si_arrays),
+        cmocka_unit_test(contact_answer),
+        cmocka_unit_test(fig5_trends),
+        cmocka_unit_test(sweep_threads_agree),
     };
     enum { NR = sizeof rules / sizeof rules[0], NO = sizeof others / sizeof others[0] };
     struct CMUnitTest tests[NR + NO];
