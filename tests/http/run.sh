@@ -189,6 +189,10 @@ post sweep "{$PSD,\"vary\":\"D\",\"values\":[2.3,2.6]}"
 check "POST /v1/sweep: 200 with one result per value" eval '[ "$STATUS" = 200 ] &&
     json ".vary == \"D\" and (.results | length == 2)"'
 
+post contact "{$PSD,\"material\":{\"E_star\":1e9,\"dgamma\":0.05,\"epsilon\":3e-10},\"R\":1e-6}"
+check "POST /v1/contact: 200 with pull_off_N and si" eval '[ "$STATUS" = 200 ] &&
+    json "(.pull_off_N.jkr | type == \"number\") and (.si | type == \"object\")"'
+
 # ---- problems ----
 post adhesion '{"psd":'
 check "malformed JSON: 400 problem" problem 400
