@@ -188,24 +188,28 @@ static void band_apply(ljgap__paper_ws *ws, const ljgap_psd *psd, size_t b, cons
         double V = ws->vfix[b] >= 0
                        ? ws->vfix[b]
                        : ljgap_packet_var(psd, ws->g_lo + (double)j * h, ws->ka[b], ws->kb[b]);
-        double half = PAPER_WIN * sqrt(V) / h;
-        size_t M = half < (double)ws->emax ? (size_t)half : ws->emax;
-        if (M == 0) {
-            if (back) {
-                out[j] = in[j];
-                if (lout) lout[j] = lin[j];
-            } else {
-                out[j] += in[j];
+        size_t M;
+        if (V < h * h) {
+            /* Narrower than the grid: the sampled Gaussian would keep (almost) all the mass
+             * in place and lose the variance V, at every band, wherever f is small (near
+             * the wall, and everywhere but g* at a stiff start), so the iteration would
+             * converge to a wrong limit as Vmax and h shrink together. Three points carrying
+             * the Gaussian's mass, mean and variance exactly are its projection on the grid. */
+            double a = V / (h * h);
+            e[0] = 1.0 - a;
+            e[1] = 0.5 * a;
+            M = 1;
+        } else {
+            double half = PAPER_WIN * sqrt(V) / h;
+            M = half < (double)ws->emax ? (size_t)half : ws->emax;
+            /* e_m = exp(-m^2 h^2/2V) = Π_{i<=m} r^(2i-1), r = exp(-h^2/2V); for V >= h^2 the
+             * sampled Gaussian's variance is V to ~exp(-2π^2) relative */
+            double r = exp(-h * h / (2.0 * V)), r2 = r * r, rm = r;
+            e[0] = 1.0;
+            for (size_t m = 1; m <= M; m++) {
+                e[m] = e[m - 1] * rm;
+                rm *= r2;
             }
-            ws->work++;
-            continue;
-        }
-        /* e_m = exp(-m^2 h^2/2V) = Π_{i<=m} r^(2i-1), r = exp(-h^2/2V) */
-        double r = exp(-h * h / (2.0 * V)), r2 = r * r, rm = r;
-        e[0] = 1.0;
-        for (size_t m = 1; m <= M; m++) {
-            e[m] = e[m - 1] * rm;
-            rm *= r2;
         }
         size_t ml = M < j ? M : j, mr = M < n - 1 - j ? M : n - 1 - j;
         double S = e[0];
@@ -392,7 +396,8 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
 
     size_t nv = n + (ts.want_sum ? NSUM : 0);
     double *v0 = calloc(nv + 1, sizeof *v0), *v1 = calloc(nv + 1, sizeof *v1);
-    double *err = calloc(nv + 1, sizeof *err);
+    double *err = calloc(2 * (nv + 1), sizeof *err);
+    double *dprev = err ? err + nv + 1 : NULL; /* the previous difference */
     int st = LJGAP_ENOMEM, have_pair = 0;
     if (!v0 || !v1 || !err) goto end;
 
@@ -463,8 +468,13 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
                        "|sigma| = %.3g)",
                        ts.g_lo, imp1);
         vmax *= 0.5;
-        for (size_t i = 0; i < nv; i++)
-            err[i] = fabs(v1[i] - v0[i]);
+        /* The iteration converges irregularly (first order in Vmax, with grid effects on
+         * top), so once there are two differences the estimate is the larger of them. */
+        for (size_t i = 0; i < nv; i++) {
+            double d = fabs(v1[i] - v0[i]);
+            err[i] = have_pair ? fmax(d, dprev[i]) : d;
+            dprev[i] = d;
+        }
         memcpy(v0, v1, nv * sizeof *v0);
         have_pair = 1;
         if (converged(v0, err, nv, tol)) break;
