@@ -15,15 +15,7 @@
 #include "../../core/mc.h"
 #include "ljgap.h"
 
-#define CHECK_CLOSE(a, b, tol)                                                                     \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b), t_ = (tol);                                                     \
-        if (!(fabs(a_ - b_) <= t_)) {                                                              \
-            print_error("%s = %.17g, %s = %.17g, |diff| = %.3g > %.3g\n", #a, a_, #b, b_,          \
-                        fabs(a_ - b_), t_);                                                        \
-            fail();                                                                                \
-        }                                                                                          \
-    } while (0)
+#include "check.h"
 
 static ljgap_opts mc_opts(long samples)
 {
@@ -71,7 +63,7 @@ static void test_tiny_m0(void **state)
                d2 = (ljgap_sigma(g[i] + h) - 2 * ljgap_sigma(g[i]) + ljgap_sigma(g[i] - h)) /
                     (h * h);
         assert_true(s[i].err > 0);
-        CHECK_CLOSE(s[i].value, ljgap_sigma(g[i]), 4 * s[i].err + fabs(d2) * 1e-6 * 9 / 2);
+        assert_close(s[i].value, ljgap_sigma(g[i]), 4 * s[i].err + fabs(d2) * 1e-6 * 9 / 2);
     }
 }
 
@@ -93,8 +85,8 @@ static void test_thin_band(void **state)
     pdf_moments(&p, &mean, &var);
     double se = V * sqrt(2.0 / (double)o.samples);
     printf("  variance %.6g vs (17) %.6g (se %.2g), mass %.6f\n", var, V, se, p.mass);
-    CHECK_CLOSE(var, V, 4 * se);
-    CHECK_CLOSE(p.mass, 1.0, 1e-3);
+    assert_close(var, V, 4 * se);
+    assert_close(p.mass, 1.0, 1e-3);
     ljgap_pdf_release(&p, 1);
 }
 
@@ -117,8 +109,8 @@ static void test_martingale(void **state)
         double se = sqrt(var / (double)o.samples);
         printf("  k2 = %g: mean %.6f (se %.2g), sigma %.5f +- %.2g, phi L1 err %.3g\n", k2[s],
                p[s].mean, se, p[s].sigma.value, p[s].sigma.err, p[s].phi_err);
-        CHECK_CLOSE(p[s].mean, 0.98, 4 * se);
-        CHECK_CLOSE(p[s].mass, 1.0, 1e-12);
+        assert_close(p[s].mean, 0.98, 4 * se);
+        assert_close(p[s].mass, 1.0, 1e-12);
         assert_true(p[s].phi_err > 0 && p[s].phi_err < 1);
     }
     ljgap_pdf_release(p, 2);
@@ -139,7 +131,7 @@ static void test_step_bias(void **state)
     for (int i = 0; i < 2; i++) {
         printf("  g = %.2f: c %.5f +- %.2g, c/2 %.5f +- %.2g\n", g[i], a[i].value, a[i].err,
                b[i].value, b[i].err);
-        CHECK_CLOSE(a[i].value, b[i].value, a[i].err);
+        assert_close(a[i].value, b[i].value, a[i].err);
     }
 }
 
@@ -164,7 +156,7 @@ static void compare(const ljgap_psd *psd, const double *g, size_t n, long sample
     for (size_t i = 0; i < n; i++) {
         printf("  g = %.2f: montecarlo %.5f +- %.2g (%.1f s), paper %.5f +- %.2g (%.1f s)\n", g[i],
                a[i].value, a[i].err, t1 - t0, b[i].value, b[i].err, t2 - t1);
-        CHECK_CLOSE(a[i].value, b[i].value, 4 * (a[i].err + b[i].err));
+        assert_close(a[i].value, b[i].value, 4 * (a[i].err + b[i].err));
     }
 }
 
@@ -204,9 +196,9 @@ static void test_summary_and_caps(void **state)
            s.g_eq.value, s.g_eq.err, s.sigma_max.value, s.sigma_max.err, s.g_at_max.value,
            s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap_now() - t0);
     /* theory.md §4 (Fig. 4, C = 1/(4π)) */
-    CHECK_CLOSE(s.g_eq.value, 2.6028, 4 * s.g_eq.err);
-    CHECK_CLOSE(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err);
-    CHECK_CLOSE(s.dgamma_eff.value, 0.20147, 4 * s.dgamma_eff.err);
+    assert_close(s.g_eq.value, 2.6028, 4 * s.g_eq.err);
+    assert_close(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err);
+    assert_close(s.dgamma_eff.value, 0.20147, 4 * s.dgamma_eff.err);
     /* caps: the work cap reduces the samples with a warning */
     o.max_work = 100000L;
     ljgap_warnings w2 = {0};

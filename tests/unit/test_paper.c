@@ -14,15 +14,7 @@
 #include "../../core/paper.h"
 #include "ljgap.h"
 
-#define CHECK_CLOSE(a, b, tol)                                                                     \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b), t_ = (tol);                                                     \
-        if (!(fabs(a_ - b_) <= t_)) {                                                              \
-            print_error("%s = %.17g, %s = %.17g, |diff| = %.3g > %.3g\n", #a, a_, #b, b_,          \
-                        fabs(a_ - b_), t_);                                                        \
-            fail();                                                                                \
-        }                                                                                          \
-    } while (0)
+#include "check.h"
 
 /* Fig. 2 with C = 1/(4π): D = 2.5, k1 = 1, k2 = 5. */
 static void fig2_psd(ljgap_psd *psd, double k2)
@@ -42,7 +34,7 @@ static void test_fig2_inset(void **state)
     double ks = 5.0, last = 0.0;
     for (int t = 0; t < 4; t++) {
         double h = ljgap__paper_h(vm[t]);
-        CHECK_CLOSE(h, 0.005, 1e-15);
+        assert_close(h, 0.005, 1e-15);
         ljgap__paper_ws *ws = ljgap__paper_alloc(&psd, vm[t], h, 0.49, 8.0, &ks, 1);
         assert_non_null(ws);
         double *p = calloc(ws->n, sizeof *p);
@@ -57,7 +49,7 @@ static void test_fig2_inset(void **state)
             if (p[i] / h > pk) pk = p[i] / h, gk = ws->g_lo + i * h;
         printf("  Vmax = 1/%-4.0f  bands %5zu  peak %.4f at g = %.4f\n", 1.0 / vm[t], ws->nb, pk,
                gk);
-        CHECK_CLOSE(pk, peak_ref[t], 0.06 * peak_ref[t]);
+        assert_close(pk, peak_ref[t], 0.06 * peak_ref[t]);
         assert_true(pk > last);
         last = pk;
         assert_true(gk >= 0.88 - 1e-9 && gk <= 0.90 + 1e-9);
@@ -91,7 +83,7 @@ static void test_transposed_equals_forward(void **state)
             s += p[i] * sg;
             sa += p[i] * fabs(sg);
         }
-        CHECK_CLOSE(u[j], s, 1e-12 * fmax(1.0, sa));
+        assert_close(u[j], s, 1e-12 * fmax(1.0, sa));
     }
     free(u);
     free(p);
@@ -117,8 +109,8 @@ static void test_pdf_invariants(void **state)
         printf("  warning: %s\n", w.msg[i]);
     assert_int_equal(st, LJGAP_OK);
     for (int s = 0; s < 3; s++) {
-        CHECK_CLOSE(out[s].mass, 1.0, 1e-10);
-        CHECK_CLOSE(out[s].mean, 0.98, 1e-10);
+        assert_close(out[s].mass, 1.0, 1e-10);
+        assert_close(out[s].mean, 0.98, 1e-10);
         assert_true(isfinite(out[s].sigma.value) && out[s].sigma.err >= 0);
         assert_true(out[s].phi_err > 0 && out[s].phi_err < 2);
         printf("  k2 = %g: sigma = %.6f +- %.2g, phi L1 err %.3g\n", out[s].k2, out[s].sigma.value,
@@ -130,9 +122,9 @@ static void test_pdf_invariants(void **state)
     ljgap_pdf g1;
     assert_int_equal(ljgap_pdf_compute(&psd, &o, 0.98, &k2[1], 1, grid, &g1, NULL), LJGAP_OK);
     assert_int_equal(g1.n, 501);
-    CHECK_CLOSE(g1.g[500], 3.0, 1e-12);
-    CHECK_CLOSE(g1.mass, 1.0, 1e-3);
-    CHECK_CLOSE(g1.sigma.value, out[1].sigma.value, g1.sigma.err + out[1].sigma.err);
+    assert_close(g1.g[500], 3.0, 1e-12);
+    assert_close(g1.mass, 1.0, 1e-3);
+    assert_close(g1.sigma.value, out[1].sigma.value, g1.sigma.err + out[1].sigma.err);
     ljgap_pdf_release(&g1, 1);
     ljgap_pdf_release(out, 3);
 }
@@ -163,10 +155,10 @@ static void test_fig4_reference(void **state)
            "(%.1f s)\n",
            s.g_eq.value, s.g_eq.err, s.sigma_max.value, s.sigma_max.err, s.g_at_max.value,
            s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap_now() - t0);
-    CHECK_CLOSE(s.g_eq.value, 2.6028, 4 * s.g_eq.err + 1e-4);
-    CHECK_CLOSE(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err + 1e-5);
-    CHECK_CLOSE(s.dgamma_eff.value, 0.20147, 4 * s.dgamma_eff.err + 1e-5);
-    CHECK_CLOSE(sg[1].value, s.sigma_max.value, 4 * sg[1].err + 1e-4);
+    assert_close(s.g_eq.value, 2.6028, 4 * s.g_eq.err + 1e-4);
+    assert_close(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err + 1e-5);
+    assert_close(s.dgamma_eff.value, 0.20147, 4 * s.dgamma_eff.err + 1e-5);
+    assert_close(sg[1].value, s.sigma_max.value, 4 * sg[1].err + 1e-4);
     assert_true(w.n >= 1);
 }
 

@@ -22,16 +22,7 @@
 #include <stdio.h>
 #include <string.h>
 
-/* |a - b| <= tol, printing both at full precision when not */
-#define assert_close(a, b, tol)                                                                    \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b), t_ = (tol);                                                     \
-        if (!(fabs(a_ - b_) <= t_)) {                                                              \
-            print_error("%s = %.17g, %s = %.17g, |diff| = %.3g > %.3g\n", #a, a_, #b, b_,          \
-                        fabs(a_ - b_), t_);                                                        \
-            fail();                                                                                \
-        }                                                                                          \
-    } while (0)
+#include "check.h"
 
 static ljgap_psd power(double D, double k1, double k2, ljgap_level lk, double level)
 {
