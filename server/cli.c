@@ -20,7 +20,7 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: ljgap NAME [FILE]\n"
                "       ljgap --help | --version\n"
-               "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep) from FILE\n"
+               "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact) from FILE\n"
                "or standard input and prints the JSON answer on standard output.\n"
                "Exit status: 0 for a 2xx answer, 1 for a problem answer, 2 for a usage or\n"
                "read error. See shared/docs/api.md for the fields.\n");
