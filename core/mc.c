@@ -171,7 +171,7 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
     gsl_rng *master = gsl_rng_alloc(gsl_rng_mt19937);
     int st = LJGAP_ENOMEM;
     if (!g || !s1 || !s2 || !bm || !m.r || !master) goto end;
-    memcpy(g, g_ave, n * sizeof *g);
+    if (n) memcpy(g, g_ave, n * sizeof *g);
     const double gend = fmax(8.0, 12.0 * sqrt(psd->m0) + 1.0);
     for (size_t i = 0; i < nc; i++)
         g[n + i] = 0.8 + (gend - 0.8) * pow((double)i / (double)(nc - 1), 1.5);
