@@ -15,9 +15,11 @@
  *    the variance m0 - cumvar(kmax) is one exact heat-kernel step (f = 1);
  *  - each band moves the mass p_j of grid point j to the points within 8√V_j with weights
  *    ∝ exp(-(g_i - g_j)^2 / 2V_j) normalized to sum 1 (mass is conserved exactly; the mean
- *    too, except for what the lower end cuts off: that "leak" is measured and reported;
- *    when 8√V_j < h the mass stays put. The start δ(g - g_ave) is split linearly between
- *    the two neighbouring points (mass and mean exact).
+ *    too, except for what the lower end cuts off: that "leak" is measured and reported).
+ *    A packet narrower than the grid (V_j < h^2) goes to three points with the Gaussian's
+ *    exact mass, mean and variance instead: the sampled Gaussian would keep its mass in
+ *    place and lose V_j. The start δ(g - g_ave) is split linearly between the two
+ *    neighbouring points (mass and mean exact).
  *  - the traction curve comes from the transposed iteration u <- T^T u, u = sigma(g_i) at
  *    the end, which gives sigma_bar at every grid point in one pass with the same arithmetic
  *    as a forward run from each point; between points it is interpolated linearly, which
@@ -31,7 +33,8 @@
  * ljgap_curve_summary takes over).
  *
  * Error: the iteration is first order in Vmax, so each level is compared with one at Vmax/2
- * (h follows the rule); err = |r(V) - r(V/2)| and the V/2 value is reported. Vmax is halved
+ * (h follows the rule); err = |r(V) - r(V/2)|, or the larger of the last two such differences
+ * once there are two (convergence is irregular), and the V/2 value is reported. Vmax is halved
  * until err <= tol max(1, |value|) or the work cap (grid points x window, summed over bands
  * and levels: o->max_work) or o->max_seconds is reached, with a warning at the cap. Each
  * halving costs about 2√2 times the previous level (5.7 times below Vmax = 1/400, where h
@@ -373,6 +376,55 @@ static double next_work(double work, double vmax)
     return (double)work * 2.0 * q * q / M_SQRT2;
 }
 
+/* Whether the level at vmax/2 fits in the work cap, given the work spent and that of the
+ * last level: LJGAP_OK to run it; 1 to stop with the pair already in hand (warned);
+ * LJGAP_ECAP when not even the first pair fits (warned). */
+static int level_fits(long work, long last, double vmax, long max_work, int have_pair,
+                      ljgap_warnings *w)
+{
+    double est = next_work((double)last, vmax);
+    if ((double)work + est <= (double)max_work) return LJGAP_OK;
+    if (!have_pair) {
+        ljgap_warn(w,
+                   "paper: the error estimate at Vmax = %g needs about %.3g window "
+                   "operations, over the cap of %ld",
+                   vmax, (double)work + est, max_work);
+        return LJGAP_ECAP;
+    }
+    ljgap_warn(w,
+               "paper: work cap reached at Vmax = %g; the error estimate is the difference "
+               "from Vmax = %g",
+               vmax, 2.0 * vmax);
+    return 1;
+}
+
+/* After the run at vmax/2 returned *st: a time cap with a pair in hand ends the refinement
+ * (returns 1, *st = LJGAP_OK); without one it is an error. Warns either way. */
+static int level_timed_out(int *st, int have_pair, double vmax, ljgap_warnings *w)
+{
+    if (*st != LJGAP_ECAP) return 0;
+    if (have_pair) {
+        ljgap_warn(w,
+                   "paper: time cap reached at Vmax = %g; the error estimate is the difference "
+                   "from Vmax = %g",
+                   vmax, 2.0 * vmax);
+        *st = LJGAP_OK;
+        return 1;
+    }
+    ljgap_warn(w, "paper: time cap reached before the error estimate at Vmax = %g", 0.5 * vmax);
+    return 0;
+}
+
+/* The error estimate of one quantity from its latest change d under Vmax halving. The
+ * iteration converges irregularly (first order in Vmax, with grid effects on top), so once
+ * there are two differences the estimate is the larger of them; *dprev keeps the last. */
+static double level_err(double d, double *dprev, int have_pair)
+{
+    double e = have_pair ? fmax(d, *dprev) : d;
+    *dprev = d;
+    return e;
+}
+
 int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                          ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
@@ -429,38 +481,15 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
                    "paper: probability reaches the lower grid end g = %g (leak x |sigma| = %.3g)",
                    ts.g_lo, impact);
     for (;;) {
-        double est = next_work(last, vmax);
-        if ((double)work + est > (double)o->max_work) {
-            if (!have_pair) {
-                ljgap_warn(w,
-                           "paper: the error estimate at Vmax = %g needs about %.3g window "
-                           "operations, over the cap of %ld",
-                           vmax, (double)work + est, o->max_work);
-                st = LJGAP_ECAP;
-                goto end;
-            }
-            ljgap_warn(w,
-                       "paper: work cap reached at Vmax = %g; the error estimate is the "
-                       "difference from Vmax = %g",
-                       vmax, 2.0 * vmax);
-            break;
-        }
+        st = level_fits(work, last, vmax, o->max_work, have_pair, w);
+        if (st == 1) break;
+        if (st) goto end;
         long wk = 0;
         double imp1 = 0.0;
         st = trac_level(psd, o, deadline, 0.5 * vmax, &ts, g_ave, n, v1, &imp1, &wk, w);
         work += wk;
         last = wk;
-        if (st == LJGAP_ECAP && have_pair) {
-            ljgap_warn(w,
-                       "paper: time cap reached at Vmax = %g; the error estimate is the "
-                       "difference from Vmax = %g",
-                       vmax, 2.0 * vmax);
-            st = LJGAP_OK;
-            break;
-        }
-        if (st == LJGAP_ECAP)
-            ljgap_warn(w, "paper: time cap reached before the error estimate at Vmax = %g",
-                       0.5 * vmax);
+        if (level_timed_out(&st, have_pair, vmax, w)) break;
         if (st) goto end;
         if (imp1 > 0.1 * tol)
             ljgap_warn(w,
@@ -468,13 +497,8 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
                        "|sigma| = %.3g)",
                        ts.g_lo, imp1);
         vmax *= 0.5;
-        /* The iteration converges irregularly (first order in Vmax, with grid effects on
-         * top), so once there are two differences the estimate is the larger of them. */
-        for (size_t i = 0; i < nv; i++) {
-            double d = fabs(v1[i] - v0[i]);
-            err[i] = have_pair ? fmax(d, dprev[i]) : d;
-            dprev[i] = d;
-        }
+        for (size_t i = 0; i < nv; i++)
+            err[i] = level_err(fabs(v1[i] - v0[i]), &dprev[i], have_pair);
         memcpy(v0, v1, nv * sizeof *v0);
         have_pair = 1;
         if (converged(v0, err, nv, tol)) break;
@@ -586,8 +610,9 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
     if (!(o->vmax > 0) || !isfinite(o->vmax)) return LJGAP_EINVAL;
     if (nk2 == 0) return LJGAP_OK;
     const double deadline = ljgap_now() + o->max_seconds, tol = o->tol;
-    double *ks = malloc(nk2 * sizeof *ks), *serr = calloc(nk2, sizeof *serr);
-    double *perr = calloc(nk2, sizeof *perr), *sig = calloc(nk2, sizeof *sig);
+    double *ks = malloc(nk2 * sizeof *ks), *serr = calloc(2 * nk2, sizeof *serr);
+    double *perr = calloc(2 * nk2, sizeof *perr), *sig = calloc(nk2, sizeof *sig);
+    double *sprev = serr ? serr + nk2 : NULL, *pprev = perr ? perr + nk2 : NULL;
     pdf_level A = {0}, B = {0};
     int st = LJGAP_ENOMEM, have_pair = 0;
     if (!ks || !serr || !perr || !sig) goto end;
@@ -624,45 +649,22 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
     for (size_t s = 0; s < nk2; s++)
         sig[s] = pdf_sigma(&A, A.p + s * A.n);
     for (;;) {
-        double est = next_work(last, vmax);
-        if ((double)work + est > (double)o->max_work) {
-            if (!have_pair) {
-                ljgap_warn(w,
-                           "paper: the error estimate at Vmax = %g needs about %.3g window "
-                           "operations, over the cap of %ld",
-                           vmax, (double)work + est, o->max_work);
-                st = LJGAP_ECAP;
-                goto end;
-            }
-            ljgap_warn(w,
-                       "paper: work cap reached at Vmax = %g; the error estimate is the "
-                       "difference from Vmax = %g",
-                       vmax, 2.0 * vmax);
-            break;
-        }
+        st = level_fits(work, last, vmax, o->max_work, have_pair, w);
+        if (st == 1) break;
+        if (st) goto end;
         long wk = 0;
         double leak = 0.0;
         st = pdf_run(psd, o, deadline, 0.5 * vmax, g_lo, g_hi, g_ave, ks, nk2, &B, &leak, &wk);
         work += wk;
         last = wk;
-        if (st == LJGAP_ECAP && have_pair) {
-            ljgap_warn(w,
-                       "paper: time cap reached at Vmax = %g; the error estimate is the "
-                       "difference from Vmax = %g",
-                       vmax, 2.0 * vmax);
-            st = LJGAP_OK;
-            break;
-        }
-        if (st == LJGAP_ECAP)
-            ljgap_warn(w, "paper: time cap reached before the error estimate at Vmax = %g",
-                       0.5 * vmax);
+        if (level_timed_out(&st, have_pair, vmax, w)) break;
         if (st) goto end;
         vmax *= 0.5;
         int ok = 1;
         for (size_t s = 0; s < nk2; s++) {
             double sb = pdf_sigma(&B, B.p + s * B.n);
-            serr[s] = fabs(sb - sig[s]);
-            perr[s] = pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n);
+            serr[s] = level_err(fabs(sb - sig[s]), &sprev[s], have_pair);
+            perr[s] = level_err(pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n), &pprev[s], have_pair);
             sig[s] = sb;
             if (serr[s] > tol * fmax(1.0, fabs(sb)) || perr[s] > tol) ok = 0;
         }
