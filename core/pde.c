@@ -59,29 +59,24 @@ typedef struct {
     double *wt; /* cell widths (for densities) */
 } pde_grid;
 
+/* The arrays share one block that starts at g. */
 static void grid_free(pde_grid *G)
 {
     free(G->g);
-    free(G->A);
-    free(G->lo);
-    free(G->hi);
-    free(G->wt);
     memset(G, 0, sizeof *G);
 }
 
 static int grid_make(pde_grid *G, double xi0, double dxi, size_t n)
 {
     memset(G, 0, sizeof *G);
+    double *b = calloc(5 * n, sizeof(double)); /* zeros: lo = hi = 0 freeze the end rows */
+    if (!b) return LJGAP_ENOMEM;
     G->n = n;
-    G->g = malloc(n * sizeof(double));
-    G->A = malloc(n * sizeof(double));
-    G->lo = calloc(n, sizeof(double));
-    G->hi = calloc(n, sizeof(double));
-    G->wt = malloc(n * sizeof(double));
-    if (!G->g || !G->A || !G->lo || !G->hi || !G->wt) {
-        grid_free(G);
-        return LJGAP_ENOMEM;
-    }
+    G->g = b;
+    G->A = b + n;
+    G->lo = b + 2 * n;
+    G->hi = b + 3 * n;
+    G->wt = b + 4 * n;
     for (size_t i = 0; i < n; i++) {
         double g = exp(xi0 + (double)i * dxi);
         double g2 = g * g, g4 = g2 * g2, g10 = g4 * g4 * g2;
@@ -258,6 +253,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
 
 /* ---- time stepping ---- */
 typedef struct {
+    double *mem;                /* one block holding every array below */
     double *fa, *fb;            /* f^2 on the grid at the two ends of the current step */
     double ka_cur, kb_cur;      /* which step fa, fb belong to (NAN: none) */
     double *ca, *cb;            /* coefficients s*f^2 at the two ends of a step */
@@ -267,35 +263,20 @@ typedef struct {
 
 static void work_free(pde_work *W)
 {
-    free(W->fa);
-    free(W->fb);
-    free(W->ca);
-    free(W->cb);
-    free(W->dl);
-    free(W->dd);
-    free(W->du);
-    free(W->rhs);
-    free(W->tmp);
+    free(W->mem);
     memset(W, 0, sizeof *W);
 }
 
 static int work_alloc(pde_work *W, size_t n)
 {
     memset(W, 0, sizeof *W);
-    W->fa = malloc(n * sizeof(double));
-    W->fb = malloc(n * sizeof(double));
+    double *b = malloc(9 * n * sizeof(double));
+    if (!b) return LJGAP_ENOMEM;
+    double **arr[9] = {&W->fa, &W->fb, &W->ca, &W->cb, &W->dl, &W->dd, &W->du, &W->rhs, &W->tmp};
+    for (int i = 0; i < 9; i++)
+        *arr[i] = b + (size_t)i * n;
+    W->mem = b;
     W->ka_cur = W->kb_cur = NAN;
-    W->ca = malloc(n * sizeof(double));
-    W->cb = malloc(n * sizeof(double));
-    W->dl = malloc(n * sizeof(double));
-    W->dd = malloc(n * sizeof(double));
-    W->du = malloc(n * sizeof(double));
-    W->rhs = malloc(n * sizeof(double));
-    W->tmp = malloc(n * sizeof(double));
-    if (!W->fa || !W->fb || !W->ca || !W->cb || !W->dl || !W->dd || !W->du || !W->rhs || !W->tmp) {
-        work_free(W);
-        return LJGAP_ENOMEM;
-    }
     return LJGAP_OK;
 }
 
@@ -319,10 +300,9 @@ static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, do
     size_t n = G->n;
     const double *lo = G->lo, *hi = G->hi, *fa = W->fa, *fb = W->fb;
     double th = st->theta, cb = (1.0 - th) * st->sb, ca = th * st->sa;
-    double *rhs = W->rhs, *dd = W->dd;
+    double *rhs = W->rhs;
     /* boundary rows are frozen (lo = hi = 0 there) */
     rhs[0] = u[0];
-    dd[0] = 1.0;
     for (size_t i = 1; i + 1 < n; i++) {
         double d2 = lo[i] * (u[i - 1] - u[i]) + hi[i] * (u[i + 1] - u[i]);
         rhs[i] = u[i] + cb * fb[i] * d2;
