@@ -68,26 +68,27 @@ static void compare(const cross_case *c, const char *what, const ljgap_est *a, c
     }
 }
 
+/* Every case: the PDE at tol 1e-8 against method m, within k times the combined estimates. */
+static void against_pde(ljgap_method m, const char *what, double k)
+{
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        ljgap_est pde[3], other[3];
+        traction(&cases[c], LJGAP_METHOD_PDE, 1e-8, pde);
+        traction(&cases[c], m, m == LJGAP_METHOD_PAPER ? 1e-4 : 1e-3, other);
+        compare(&cases[c], what, pde, other, k);
+    }
+}
+
 static void test_pde_vs_paper(void **state)
 {
     (void)state;
-    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        ljgap_est pde[3], paper[3];
-        traction(&cases[k], LJGAP_METHOD_PDE, 1e-8, pde);
-        traction(&cases[k], LJGAP_METHOD_PAPER, 1e-4, paper);
-        compare(&cases[k], "pde/paper", pde, paper, 3.0);
-    }
+    against_pde(LJGAP_METHOD_PAPER, "pde/paper", 3.0);
 }
 
 static void test_pde_vs_montecarlo(void **state)
 {
     (void)state;
-    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        ljgap_est pde[3], mc[3];
-        traction(&cases[k], LJGAP_METHOD_PDE, 1e-8, pde);
-        traction(&cases[k], LJGAP_METHOD_MC, 1e-3, mc);
-        compare(&cases[k], "pde/mc", pde, mc, 4.0);
-    }
+    against_pde(LJGAP_METHOD_MC, "pde/mc", 4.0);
 }
 
 int main(void)
