@@ -89,8 +89,8 @@ static int grid_make(pde_grid *G, double xi0, double dxi, size_t n)
         G->hi[i] = 2.0 / (hp * (hm + hp));
     }
     for (size_t i = 0; i < n; i++) {
-        double a = i > 0 ? G->g[i] - G->g[i - 1] : 0, b = i + 1 < n ? G->g[i + 1] - G->g[i] : 0;
-        G->wt[i] = 0.5 * (a + b);
+        double hm = i > 0 ? G->g[i] - G->g[i - 1] : 0, hp = i + 1 < n ? G->g[i + 1] - G->g[i] : 0;
+        G->wt[i] = 0.5 * (hm + hp);
     }
     return LJGAP_OK;
 }
