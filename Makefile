@@ -8,8 +8,18 @@
 #   V=1             show commands
 
 PORT ?= 8080
-PKGS := libmicrohttpd libcjson gsl cmocka
-DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev curl jq
+PKGS := libmicrohttpd libcjson gsl cmocka fftw3
+DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev libfftw3-dev curl jq
+# Commands that must be on PATH; a missing one is installed from the Debian package after the colon.
+CMDS := curl:curl jq:jq
+# Each feature adds to these in its own fragment mk/*.mk:
+#   PKGS, DEBS, CMDS   what check-deps makes sure of
+#   ALL_EXTRA          more things `make all` builds
+#   TEST_PREP          things built or fetched before the test suites run
+#   RUN_PREP           things `make run` needs (the page's vendored files, say)
+ALL_EXTRA :=
+TEST_PREP :=
+RUN_PREP :=
 
 ifdef SANITIZE
 BUILD ?= build/san
@@ -24,6 +34,8 @@ Q :=
 else
 Q := @
 endif
+
+include $(sort $(wildcard mk/*.mk))
 
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null)
@@ -53,7 +65,7 @@ BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 PROGS := $(BUILD)/ljgap $(BUILD)/ljgapd
 
 .PHONY: all test run deps check-deps bench clean format
-all: $(PROGS) $(UNIT_BIN) $(BENCH_BIN)
+all: $(PROGS) $(UNIT_BIN) $(BENCH_BIN) $(ALL_EXTRA)
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -98,11 +110,14 @@ $(BUILD)/bench/%: $(BUILD)/bench/%.o $(LIBSERVER) $(LIBCORE)
 
 # Install what a fresh Debian machine lacks, only when something is missing.
 check-deps:
-	@pkg-config --exists $(PKGS) 2>/dev/null && command -v curl >/dev/null && command -v jq >/dev/null \
-	  || $(MAKE) --no-print-directory deps
+	@ok=1; pkg-config --exists $(PKGS) 2>/dev/null || ok=0; \
+	for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || ok=0; done; \
+	for c in $(CMDS); do command -v $${c%%:*} >/dev/null || ok=0; done; \
+	[ $$ok = 1 ] || $(MAKE) --no-print-directory deps
 
 deps:
 	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	for c in $(CMDS); do command -v $${c%%:*} >/dev/null || missing="$$missing $${c#*:}"; done; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing:$$missing"; \
 	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
@@ -111,11 +126,11 @@ deps:
 
 # The recursive make re-reads pkg-config after check-deps may have installed libraries.
 test: check-deps
-	@$(MAKE) --no-print-directory all
+	@$(MAKE) --no-print-directory all $(TEST_PREP)
 	@BUILD=$(BUILD) tests/run.sh
 
 run: check-deps
-	@$(MAKE) --no-print-directory all
+	@$(MAKE) --no-print-directory all $(RUN_PREP)
 	$(BUILD)/ljgapd --port $(PORT) --web web
 
 bench: check-deps

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and writes their figures to bench/results/. Figures, not pass/fail.
+# speed.txt comes from here; every other bench/*.sh is run after it, in name order, and writes
+# its own files into bench/results/.
 set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
+export BUILD
 mkdir -p bench/results
 out=bench/results/speed.txt
 {
@@ -14,3 +17,8 @@ out=bench/results/speed.txt
         echo "fig4_adhesion_instructions ${ir:-unknown} (callgrind)"
     fi
 } | tee "$out"
+for s in bench/*.sh; do
+    [ "$s" = bench/run.sh ] && continue
+    echo "== $s"
+    "$s"
+done
