@@ -1,0 +1,72 @@
+/* ljgap_sim.h -- the discrete numerical model of the paper's Section 5 (theory.md §5).
+ *
+ * A periodic square of side L (units of chi), n x n points, random surfaces with the
+ * requested isotropic PSD, Lennard-Jones tractions at every point, the elastic half-space
+ * answer in Fourier space, solved to a stated residual at each prescribed mean gap. The mean
+ * gap is swept with continuation from the largest value inward and then back out; where the
+ * two branches differ the sweep has a jump (hysteresis) and the result says so.
+ *
+ * Dimensionless as in ljgap.h. Depends on FFTW3 and GSL; knows nothing of HTTP or JSON.
+ */
+#ifndef LJGAP_SIM_H
+#define LJGAP_SIM_H
+#include "ljgap.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LJGAP_SIM_N_MAX 512          /* grid points per side */
+#define LJGAP_SIM_REALIZATIONS_MAX 16
+#define LJGAP_SIM_GAPS_MAX 200       /* mean gaps in one job */
+
+typedef struct {
+    int n;               /* grid points per side: even, 8 <= n <= LJGAP_SIM_N_MAX (64) */
+    double L;            /* side of the periodic square in units of chi; 0 = 2*pi/k1 */
+    int realizations;    /* 1 <= realizations <= LJGAP_SIM_REALIZATIONS_MAX (4) */
+    unsigned long seed;  /* seed of realization 0; realization r uses seed + r (1) */
+    double tol;          /* residual target: rms of the force balance over the grid,
+                          * relative to sigma0 (1e-8) */
+    long max_iter;       /* iterations of the solver at one mean gap (200000) */
+    double max_seconds;  /* wall-time cap of the whole run (600 s) */
+    const volatile int *cancel; /* optional: stop with LJGAP_ECANCEL when *cancel != 0 */
+    /* optional: called now and then with the fraction done (0..1); must be cheap */
+    void (*progress)(void *ctx, double fraction);
+    void *progress_ctx;
+} ljgap_sim_opts;
+
+void ljgap_sim_opts_default(ljgap_sim_opts *o);
+
+typedef struct {
+    size_t n_gap;        /* number of mean gaps, in the order asked */
+    double *g_ave;       /* owned: the mean gaps */
+    double *sigma;       /* owned: mean traction / sigma0 on the inward sweep, averaged
+                          * over realizations */
+    double *sigma_std;   /* owned: standard deviation over realizations (0 for one) */
+    double *sigma_err;   /* owned: estimated error of sigma: standard error of the mean
+                          * plus the effect of the residual left by the solver */
+    double *sigma_out;   /* owned: the same on the outward sweep (equal to sigma where
+                          * there is no hysteresis) */
+    double *residual;    /* owned: largest final residual over realizations, per gap */
+    int *jump;           /* owned: 1 where some realization jumped between branches
+                          * between this gap and the previous (larger) one on the way in */
+    int realizations;
+    double *m0_realized; /* owned: height variance of each realization */
+    double m0_target;    /* variance of the PSD (the continuum m0) */
+    double m0_grid;      /* the part of it carried by the grid's wavevectors */
+    double L;            /* side actually used */
+    int n;               /* grid actually used */
+} ljgap_sim_result;
+
+/* Runs the model for g_ave[0..n_gap-1] (each in [LJGAP_G_MIN, LJGAP_G_MAX], any order).
+ * The PSD must be band-limited (finite k2) and resolved by the grid: k2 <= pi n / L
+ * (otherwise LJGAP_EINVAL with a warning that says which n would do). Returns LJGAP_OK,
+ * LJGAP_EINVAL, LJGAP_ENOMEM, LJGAP_ECAP (time cap; res holds nothing), LJGAP_ECANCEL or
+ * LJGAP_EFAIL. res is released with ljgap_sim_result_free. */
+int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g_ave,
+                  size_t n_gap, ljgap_sim_result *res, ljgap_warnings *w);
+void ljgap_sim_result_free(ljgap_sim_result *res);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
