@@ -74,12 +74,14 @@ static char oom_body[] = "{\"type\":\"https://ljgap.example/problems/out-of-memo
                          "\"title\":\"Out of memory\",\"status\":500,"
                          "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
 
-static const ljgap_limits limits_default = {.max_seconds = 20.0,
-                                            .max_samples = 1000000,
-                                            .max_points = 10000,
-                                            .sweep_threads = 0,
-                                            .cancel = NULL};
-static ljgap_limits limits = limits_default; /* written only by ljgap_handler_set_limits */
+/* A macro, not a const object: C (and clang) needs a constant expression to start limits. */
+#define LIMITS_DEFAULT                                                                             \
+    {                                                                                              \
+        .max_seconds = 20.0, .max_samples = 1000000, .max_points = 10000, .sweep_threads = 0,      \
+        .cancel = NULL                                                                             \
+    }
+static const ljgap_limits limits_default = LIMITS_DEFAULT;
+static ljgap_limits limits = LIMITS_DEFAULT; /* written only by ljgap_handler_set_limits */
 
 void ljgap_limits_default(ljgap_limits *l)
 {
