@@ -1,0 +1,222 @@
+/* fuzz_handler.c -- libFuzzer target on ljgap_handle, the one request handler.
+ *
+ * An input is "ENDPOINT\nBODY": the first line names the endpoint (adhesion, traction, pdf,
+ * sweep, contact, or anything else for a 404), the rest is the request body, handed over in a
+ * buffer of exactly its length (no NUL after it), so that any read past the end is caught by
+ * AddressSanitizer. An input without a newline is all endpoint name and an empty body.
+ *
+ * Besides crashes, leaks and undefined behaviour (the sanitizers), every answer is checked
+ * against the contract (shared/docs/api.md) and the handler's own rules, and any breach
+ * aborts (the fuzzer keeps the input):
+ *   - status is 200, 400, 404 or 422 (500 would be out of memory, 503 a cancel: neither
+ *     happens here), and 404 exactly when the endpoint is unknown;
+ *   - the body is exactly one JSON object, len == strlen(body), and every number in it is
+ *     finite; the content type is application/json for 200, application/problem+json else;
+ *   - 200: meta {method, elapsed_ms >= 0, version, warnings[] of strings, cached false},
+ *     an "error" object (a sweep's in its first result), and no warning saying a result was not
+ * finite (that would be NaN or Inf computed by the core and papered over with null);
+ *   - problems: type https://ljgap.example/problems/..., title, status equal to the HTTP
+ *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
+ *     pointer that names a member of the request or a missing member of one that exists.
+ *
+ * The handler's limits are lowered (fuzz_limits) so each input runs in milliseconds; a
+ * computation that ignored them would trip libFuzzer's -timeout.
+ *
+ * The same file is linked into build/.../fuzz/replay (tests/fuzz/replay.c) with the normal
+ * compiler: there a breach is counted (ljgap_fuzz_failures) instead of aborting.
+ */
+#include "handler.h"
+
+#include <cjson/cJSON.h>
+#include <gsl/gsl_errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int LLVMFuzzerInitialize(int *argc, char ***argv);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Set by the replay driver: count breaches instead of aborting. */
+int ljgap_fuzz_noabort;
+long ljgap_fuzz_failures;
+
+/* The lowered limits: short computations, few points, few samples, two sweep threads. */
+static const ljgap_limits fuzz_limits = {
+    .max_seconds = 0.25, .max_samples = 2000, .max_points = 16, .sweep_threads = 2, .cancel = NULL};
+
+static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "fuzz_handler: endpoint \"%.40s\", status %d: ", ep, r->status);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "\n  body: %.600s\n", r->body ? r->body : "(null)");
+    ljgap_fuzz_failures++;
+    if (!ljgap_fuzz_noabort) abort();
+}
+
+int LLVMFuzzerInitialize(int *argc, char ***argv)
+{
+    gsl_set_error_handler_off();
+    ljgap_handler_set_limits(&fuzz_limits);
+    return 0;
+}
+
+/* Is every number in v finite? */
+static int all_finite(const cJSON *v)
+{
+    if (cJSON_IsNumber(v)) return isfinite(v->valuedouble);
+    for (const cJSON *c = v->child; c; c = c->next)
+        if (!all_finite(c)) return 0;
+    return 1;
+}
+
+/* The member or element of v named by one unescaped pointer token, or NULL. */
+static const cJSON *step(const cJSON *v, const char *tok)
+{
+    if (cJSON_IsObject(v)) return cJSON_GetObjectItemCaseSensitive(v, tok);
+    if (!cJSON_IsArray(v) || !*tok || strspn(tok, "0123456789") != strlen(tok) ||
+        (tok[0] == '0' && tok[1]) || strlen(tok) > 9)
+        return NULL;
+    return cJSON_GetArrayItem(v, atoi(tok));
+}
+
+/* 0 when ptr is a well-formed RFC 6901 pointer whose target exists in doc, or whose parent
+ * exists and is an object (a missing member); else a reason. */
+static const char *pointer_problem(const cJSON *doc, const char *ptr)
+{
+    const cJSON *v = doc, *parent = NULL;
+    size_t n = strlen(ptr);
+    char *tok = malloc(n + 1);
+    const char *why = NULL;
+    if (!tok) return NULL;
+    if (n && ptr[0] != '/') why = "does not start with /";
+    for (const char *p = ptr; !why && *p;) {
+        size_t k = 0;
+        for (p++; *p && *p != '/'; p++) {
+            if (*p == '~' && (p[1] == '0' || p[1] == '1'))
+                tok[k++] = *++p == '0' ? '~' : '/';
+            else if (*p == '~')
+                why = "has a ~ not followed by 0 or 1";
+            else
+                tok[k++] = *p;
+        }
+        tok[k] = '\0';
+        if (!v) {
+            why = parent ? "names a member below a missing one" : "names nothing";
+            break;
+        }
+        parent = v;
+        v = step(v, tok);
+    }
+    if (!why && !v && !cJSON_IsObject(parent)) why = "names nothing in the request";
+    free(tok);
+    return why;
+}
+
+static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc, const cJSON *req)
+{
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(doc, "type");
+    const cJSON *st = cJSON_GetObjectItemCaseSensitive(doc, "status");
+    const cJSON *errs = cJSON_GetObjectItemCaseSensitive(doc, "errors"), *e;
+    if (strcmp(r->content_type, "application/problem+json") != 0)
+        breach(ep, r, "a problem sent as %s", r->content_type);
+    if (!cJSON_IsString(type) ||
+        strncmp(type->valuestring, "https://ljgap.example/problems/", 30) != 0 ||
+        !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "title")) ||
+        !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "detail")) || !cJSON_IsNumber(st) ||
+        st->valuedouble != r->status || !cJSON_IsArray(errs)) {
+        breach(ep, r, "not a problem document (type, title, status, detail, errors)");
+        return;
+    }
+    cJSON_ArrayForEach(e, errs)
+    {
+        const cJSON *p = cJSON_GetObjectItemCaseSensitive(e, "pointer");
+        const char *why;
+        if (!cJSON_IsString(p) || !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(e, "detail")))
+            breach(ep, r, "an errors[] entry without a string pointer and detail");
+        else if (req && (why = pointer_problem(req, p->valuestring)))
+            breach(ep, r, "pointer \"%.100s\" %s", p->valuestring, why);
+    }
+}
+
+static void check_ok(const char *ep, const ljgap_reply *r, const cJSON *doc)
+{
+    const cJSON *meta = cJSON_GetObjectItemCaseSensitive(doc, "meta"), *w, *ms;
+    const cJSON *res = cJSON_GetObjectItemCaseSensitive(doc, "results");
+    if (strcmp(r->content_type, "application/json") != 0)
+        breach(ep, r, "a 200 answer sent as %s", r->content_type);
+    ms = cJSON_GetObjectItemCaseSensitive(meta, "elapsed_ms");
+    w = cJSON_GetObjectItemCaseSensitive(meta, "warnings");
+    if (!cJSON_IsObject(meta) ||
+        !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(meta, "method")) ||
+        !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(meta, "version")) ||
+        !cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(meta, "cached")) || !cJSON_IsNumber(ms) ||
+        !(ms->valuedouble >= 0) || !cJSON_IsArray(w) ||
+        !cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(
+            strcmp(ep, "sweep") == 0 ? cJSON_GetArrayItem(res, 0) : doc, "error"))) {
+        breach(ep, r,
+               "a 200 answer without meta {method, elapsed_ms, version, warnings, "
+               "cached} or without error");
+        return;
+    }
+    for (const cJSON *s = w->child; s; s = s->next) {
+        if (!cJSON_IsString(s))
+            breach(ep, r, "a warning that is not a string");
+        else if (strstr(s->valuestring, "is not a finite number"))
+            breach(ep, r, "a non-finite result went out as null: %.200s", s->valuestring);
+    }
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    const uint8_t *nl = memchr(data, '\n', size);
+    size_t eplen = nl ? (size_t)(nl - data) : size;
+    size_t len = nl ? size - eplen - 1 : 0;
+    char *ep = malloc(eplen + 1), *body = malloc(len ? len : 1);
+    ljgap_reply r = {0};
+    cJSON *doc = NULL, *req = NULL;
+    const char *end = NULL;
+    int known;
+    if (!ep || !body) goto end;
+    memcpy(ep, data, eplen);
+    ep[eplen] = '\0';
+    if (len) memcpy(body, nl + 1, len);
+    known = ljgap_handler_has(ep);
+    ljgap_handle(ep, body, len, &r);
+    if (!r.body || !r.content_type) {
+        breach(ep, &r, "no body or no content type");
+        goto end;
+    }
+    if (strlen(r.body) != r.len) breach(ep, &r, "len %zu != strlen(body)", r.len);
+    if (r.status != 200 && r.status != 400 && r.status != 404 && r.status != 422)
+        breach(ep, &r, "status outside 200, 400, 404, 422");
+    if ((r.status == 404) != !known) breach(ep, &r, "404 must mean exactly: unknown endpoint");
+    doc = cJSON_ParseWithLengthOpts(r.body, r.len, &end, 0);
+    if (!cJSON_IsObject(doc) || end != r.body + r.len) {
+        breach(ep, &r, "the body is not one JSON object");
+        goto end;
+    }
+    if (!all_finite(doc)) breach(ep, &r, "a number that is not finite");
+    if (r.status == 200) {
+        check_ok(ep, &r, doc);
+    } else {
+        /* pointers are checked against the request when it is JSON (422 answers) */
+        if (r.status == 422) req = cJSON_ParseWithLength(body, len);
+        check_problem(ep, &r, doc, req);
+    }
+end:
+    cJSON_Delete(doc);
+    cJSON_Delete(req);
+    ljgap_reply_free(&r);
+    free(ep);
+    free(body);
+    return 0;
+}
