@@ -638,11 +638,14 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
     }
 }
 
-/* Parses exactly one JSON value filling body[0..len); NULL with *where set when it is not. */
+/* Parses exactly one JSON value filling body[0..len), which must be UTF-8 (RFC 8259 §8.1: the
+ * answer quotes names from it); NULL with *where set when it is not. */
 static cJSON *parse_body(const char *body, size_t len, size_t *where)
 {
     const char *end = body;
-    cJSON *root = body && len ? cJSON_ParseWithLengthOpts(body, len, &end, 0) : NULL;
+    cJSON *root = NULL;
+    if (body && (*where = ljgap_utf8_span(body, len)) < len) return NULL;
+    root = body && len ? cJSON_ParseWithLengthOpts(body, len, &end, 0) : NULL;
     if (!root) {
         *where = end && body ? (size_t)(end - body) : 0;
         return NULL;
@@ -670,16 +673,18 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
     if (!r) {
+        /* the name may be any bytes: quote only its first whole UTF-8 characters */
         snprintf(detail, sizeof detail,
-                 "no endpoint \"%.60s\": the endpoints are adhesion, "
+                 "no endpoint \"%.*s\": the endpoints are adhesion, "
                  "traction, pdf, sweep and contact",
+                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
         reply_problem(out, &P_NOT_FOUND, detail, NULL);
         goto end;
     }
     if (!(root = parse_body(body, len, &where))) {
         snprintf(detail, sizeof detail,
-                 "the body is not one valid JSON value (error at byte "
+                 "the body is not one valid JSON value in UTF-8 (error at byte "
                  "%zu of %zu)",
                  where, len);
         reply_problem(out, &P_MALFORMED, detail, NULL);

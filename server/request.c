@@ -68,6 +68,41 @@ void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
     cJSON_AddItemToArray(e->errors, item);
 }
 
+size_t ljgap_utf8_span(const char *s, size_t n)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    size_t i = 0;
+    while (i < n) {
+        unsigned c = u[i], need, cp, min;
+        if (c < 0x80) {
+            i++;
+            continue;
+        }
+        if (c >= 0xC2 && c <= 0xDF)
+            need = 1, cp = c & 0x1F, min = 0x80;
+        else if (c >= 0xE0 && c <= 0xEF)
+            need = 2, cp = c & 0x0F, min = 0x800;
+        else if (c >= 0xF0 && c <= 0xF4)
+            need = 3, cp = c & 0x07, min = 0x10000;
+        else
+            return i;
+        if (n - i <= need) return i;
+        for (unsigned k = 1; k <= need; k++) {
+            if ((u[i + k] & 0xC0) != 0x80) return i;
+            cp = cp << 6 | (u[i + k] & 0x3F);
+        }
+        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return i;
+        i += need + 1;
+    }
+    return n;
+}
+
+/* Bytes of s to quote in a message: at most max, whole characters only. */
+static int quote_len(const char *s, size_t max)
+{
+    return (int)ljgap_utf8_span(s, strnlen(s, max));
+}
+
 /* Pointer base + "/" + key with ~ and / escaped (RFC 6901 §3); malloc'd, NULL on OOM. */
 static char *ptr_key(const char *base, const char *key)
 {
@@ -118,9 +153,9 @@ static void only_fields(ljgap_verr *e, const cJSON *obj, const char *base, const
             ljgap_verr_add(e, ptr, "field \"%s\" appears more than once", it->string);
         else
             ljgap_verr_add(e, ptr,
-                           "unknown field \"%.60s\" (a typo? it is not part of this "
+                           "unknown field \"%.*s\" (a typo? it is not part of this "
                            "request in the v1 contract)",
-                           it->string);
+                           quote_len(it->string, 60), it->string);
         free(ptr);
     }
 }
@@ -207,7 +242,8 @@ static int pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *con
     }
     for (int i = 0; names[i]; i++)
         if (strcmp(it->valuestring, names[i]) == 0) return i;
-    ljgap_verr_add(e, ptr, "unknown %s \"%.40s\": expected %s", field, it->valuestring, what);
+    ljgap_verr_add(e, ptr, "unknown %s \"%.*s\": expected %s", field,
+                   quote_len(it->valuestring, 40), it->valuestring, what);
     return -1;
 }
 

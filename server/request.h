@@ -87,6 +87,10 @@ int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);
 /* The PSD spec of sweep value i (rq->x[i] placed in the varied field, in core units). */
 void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec);
 
+/* Length of the longest prefix of s[0..n) made of whole, well-formed UTF-8 characters (no
+ * overlong forms, surrogates or code points past U+10FFFF): n when all of it is. */
+size_t ljgap_utf8_span(const char *s, size_t n);
+
 /* Records one problem at pointer ptr (printf-style detail). */
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));

@@ -10,8 +10,9 @@
  * aborts (the fuzzer keeps the input):
  *   - status is 200, 400, 404 or 422 (500 would be out of memory, 503 a cancel: neither
  *     happens here), and 404 exactly when the endpoint is unknown;
- *   - the body is exactly one JSON object, len == strlen(body), and every number in it is
- *     finite; the content type is application/json for 200, application/problem+json else;
+ *   - the body is exactly one JSON object in valid UTF-8 (RFC 8259 §8.1), len ==
+ *     strlen(body), and every number in it is finite; the content type is application/json for 200,
+ * application/problem+json else;
  *   - 200: meta {method, elapsed_ms >= 0, version, warnings[] of strings, cached false},
  *     an "error" object (a sweep's in its first result), and no warning saying a result was not
  * finite (that would be NaN or Inf computed by the core and papered over with null);
@@ -29,12 +30,14 @@
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_errno.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <wchar.h>
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -65,8 +68,27 @@ static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     gsl_set_error_handler_off();
+    if (!setlocale(LC_CTYPE, "C.UTF-8")) {
+        fprintf(stderr, "fuzz_handler: no C.UTF-8 locale to check answers with\n");
+        abort();
+    }
     ljgap_handler_set_limits(&fuzz_limits);
     return 0;
+}
+
+/* Is s[0..n) well-formed UTF-8? Decoded by the C library (locale C.UTF-8, which refuses
+ * overlong forms, surrogates and code points past U+10FFFF), independently of the server. */
+static int utf8_ok(const char *s, size_t n)
+{
+    mbstate_t st;
+    memset(&st, 0, sizeof st);
+    for (size_t i = 0, k; i < n; i += k) {
+        wchar_t wc;
+        k = mbrtowc(&wc, s + i, n - i, &st);
+        if (k == (size_t)-1 || k == (size_t)-2) return 0;
+        if (k == 0) k = 1; /* a NUL byte (len != strlen is reported on its own) */
+    }
+    return 1;
 }
 
 /* Is every number in v finite? */
@@ -199,6 +221,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (r.status != 200 && r.status != 400 && r.status != 404 && r.status != 422)
         breach(ep, &r, "status outside 200, 400, 404, 422");
     if ((r.status == 404) != !known) breach(ep, &r, "404 must mean exactly: unknown endpoint");
+    if (!utf8_ok(r.body, r.len)) breach(ep, &r, "not valid UTF-8");
     doc = cJSON_ParseWithLengthOpts(r.body, r.len, &end, 0);
     if (!cJSON_IsObject(doc) || end != r.body + r.len) {
         breach(ep, &r, "the body is not one JSON object");
