@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# The catalogue of bad requests: each must get its problem status, as application/problem+json
+# with a matching "status" and, where the case names one, an errors[] entry at its JSON pointer,
+# from the daemon ($BUILD/ljgapd over loopback) and, for what the handler decides (400, 404,
+# 422), from the CLI ($BUILD/ljgap, exit status 1) too. One "ok"/"not ok" line per case.
+#
+# A case is tests/bad_inputs/cases/NAME.req: a first line
+#   #> ENDPOINT STATUS POINTER [CONTENT-TYPE]
+# (POINTER "-" for none to check, "" for the root; CONTENT-TYPE "none" sends no header, the
+# default is application/json), then the body, byte for byte, up to the end of the file.
+# The big cases (deep nesting, giant arrays, over 1 MiB) are written here instead of committed.
+#   BUILD=build/h-harden tests/bad_inputs/run.sh
+#   WRAP="valgrind --error-exitcode=99 ..." tests/bad_inputs/run.sh   (daemon under a wrapper;
+#                                                                      exit status checked)
+set -u
+cd "$(dirname "$0")/../.."
+BUILD=${BUILD:-build}
+BIN=$BUILD/ljgapd
+CLI=$BUILD/ljgap
+WRAP=${WRAP:-}
+tmp=$(mktemp -d)
+PID=
+cleanup() {
+    [ -n "$PID" ] && kill -KILL "$PID" 2>/dev/null
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+
+for b in "$BIN" "$CLI"; do
+    if [ ! -x "$b" ]; then
+        echo "not ok - $b is not built"
+        exit 1
+    fi
+done
+
+# ---- the generated cases ----
+gen() { # gen NAME "HEADER" < body
+    { printf '#> %s\n' "$2"; cat; } >"$tmp/gen/$1.req"
+}
+mkdir -p "$tmp/gen"
+PSD='"psd":{"kind":"power","D":2.5,"k1":1,"k2":8,"C":0.0796}'
+awk 'BEGIN { for (i = 0; i < 100000; i++) printf "["; }' | gen deep-nesting-100000 'adhesion 400 -'
+awk -v p="$PSD" 'BEGIN { printf "{\"psd\":{\"kind\":\"power\",\"D\":"; for (i = 0; i < 500; i++)
+    printf "["; for (i = 0; i < 500; i++) printf "]"; printf ",\"k1\":1,\"C\":0.1}}" }' |
+    gen nesting-500-in-a-field 'adhesion 422 /psd/D'
+awk -v p="$PSD" 'BEGIN { printf "{%s,\"g_ave\":[", p; for (i = 0; i < 20000; i++)
+    printf "%s%d", i ? "," : "", 2 + i % 3; printf "]}" }' | gen giant-g_ave-array 'traction 422 /g_ave'
+awk 'BEGIN { printf "{\"psd\":{\"kind\":\"table\",\"k\":["; for (i = 1; i <= 10001; i++)
+    printf "%s%d", (i > 1 ? "," : ""), i; printf "],\"P\":["; for (i = 1; i <= 10001; i++)
+    printf "%s%g", (i > 1 ? "," : ""), 1 / (i * i * i); printf "]}}" }' |
+    gen giant-table 'adhesion 422 /psd/k'
+awk -v p="$PSD" 'BEGIN { printf "{%s", p; for (i = 0; i < 300; i++) printf ",\"x%d\":%d", i, i;
+    printf "}" }' | gen many-unknown-fields 'adhesion 422 /x0'
+awk -v p="$PSD" 'BEGIN { printf "{%s,\"", p; for (i = 0; i < 200000; i++) printf "k";
+    printf "\":1}" }' | gen long-field-name 'adhesion 422 -'
+awk -v p="$PSD" 'BEGIN { printf "{%s,\"vary\":\"m0\",\"values\":[", p; for (i = 0; i < 50000; i++)
+    printf "%s1e400", i ? "," : ""; printf "]}" }' | gen giant-values-overflowing 'sweep 422 /values'
+{ head -c $((1024 * 1024)) /dev/zero | tr '\0' ' '; echo "{$PSD}"; } |
+    gen over-1-MiB 'adhesion 413 -'
+
+# ---- the daemon ----
+$WRAP "$BIN" --port 0 >"$tmp/d.out" 2>"$tmp/d.err" &
+PID=$!
+URL=
+for _ in $(seq 1 400); do
+    URL=$(sed -n '1s|^listening on \(http://127\.0\.0\.1:[0-9]*\)/$|\1|p' "$tmp/d.out")
+    [ -n "$URL" ] && break
+    sleep 0.05
+done
+if [ -z "$URL" ]; then
+    echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/d.err")"
+    exit 1
+fi
+
+# has_problem FILE STATUS POINTER: FILE is a problem with that status (and pointer)
+has_problem() {
+    jq -e --argjson s "$2" --arg p "$3" '.status == $s and (.type | type == "string")
+        and (.title | type == "string") and (.detail | type == "string")
+        and (.errors | type == "array")
+        and ($p == "-" or any(.errors[]; .pointer == $p))' "$1" >/dev/null 2>&1
+}
+
+for f in tests/bad_inputs/cases/*.req "$tmp"/gen/*.req; do
+    name=$(basename "$f" .req)
+    read -r mark ep status ptr ctype < <(head -n 1 "$f")
+    if [ "$mark" != "#>" ] || [ -z "${ptr:-}" ]; then
+        echo "not ok - $name: no '#> ENDPOINT STATUS POINTER' line"
+        continue
+    fi
+    [ "$ptr" = '""' ] && ptr=
+    tail -n +2 "$f" >"$tmp/body"
+    case ${ctype:-application/json} in
+    none) hdr=(-H 'Content-Type:') ;;
+    *) hdr=(-H "Content-Type: ${ctype:-application/json}") ;;
+    esac
+    got=$(curl -s --max-time 60 -o "$tmp/answer" -D "$tmp/hdrs" -w '%{http_code}' \
+        "${hdr[@]}" --data-binary @"$tmp/body" "$URL/v1/$ep")
+    type=$(grep -i '^content-type:' "$tmp/hdrs" | head -n 1 | cut -d: -f2- | tr -d '\r ')
+    if [ "$got" = "$status" ] && [ "$type" = application/problem+json ] &&
+        has_problem "$tmp/answer" "$status" "$ptr"; then
+        echo "ok - bad input $name: HTTP $status${ptr:+ at $ptr}"
+    else
+        echo "not ok - bad input $name: HTTP $got ($type), expected $status at '$ptr':" \
+            "$(head -c 300 "$tmp/answer")"
+    fi
+    case $status in 400 | 404 | 422) ;; *) continue ;; esac
+    "$CLI" "$ep" "$tmp/body" >"$tmp/answer" 2>/dev/null
+    rc=$?
+    if [ "$rc" = 1 ] && has_problem "$tmp/answer" "$status" "$ptr"; then
+        echo "ok - bad input $name: CLI $status${ptr:+ at $ptr}"
+    else
+        echo "not ok - bad input $name: CLI exit $rc, expected 1 with $status at '$ptr':" \
+            "$(head -c 300 "$tmp/answer")"
+    fi
+done
+
+req_ok=$(curl -s --max-time 5 -o /dev/null -w '%{http_code}' "$URL/healthz")
+kill -TERM "$PID"
+wait "$PID"
+rc=$?
+PID=
+if [ "$req_ok" = 200 ] && [ "$rc" = 0 ]; then
+    echo "ok - the daemon served /healthz after the catalogue and exited 0 on SIGTERM"
+else
+    echo "not ok - after the catalogue: /healthz $req_ok, exit status $rc:" \
+        "$(grep -v '^[A-Z]* /' "$tmp/d.err" | tail -n 20)"
+fi
