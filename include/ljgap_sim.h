@@ -21,17 +21,22 @@ extern "C" {
 
 typedef struct {
     int n;               /* grid points per side: even, 8 <= n <= LJGAP_SIM_N_MAX (64) */
-    double L;            /* side of the periodic square in units of chi; 0 = 2*pi/k1 */
+    double L;            /* side of the periodic square in units of chi; 0 = 2*pi/k1;
+                          * otherwise 2*pi/k1 <= L <= 1e4 * 2*pi/k1 */
     int realizations;    /* 1 <= realizations <= LJGAP_SIM_REALIZATIONS_MAX (4) */
     unsigned long seed;  /* seed of realization 0; realization r uses seed + r (1) */
     double tol;          /* residual target: rms of the force balance over the grid,
-                          * relative to sigma0 (1e-8) */
+                          * relative to sigma0, or to the rms traction where that exceeds
+                          * sigma0 (deep compression), 1e-14 <= tol <= 1e-2 (1e-8) */
     long max_iter;       /* iterations of the solver at one mean gap (200000) */
     double max_seconds;  /* wall-time cap of the whole run (600 s) */
     const volatile int *cancel; /* optional: stop with LJGAP_ECANCEL when *cancel != 0 */
     /* optional: called now and then with the fraction done (0..1); must be cheap */
     void (*progress)(void *ctx, double fraction);
     void *progress_ctx;
+    int match_m0;        /* 1: scale each realization to carry the PSD's m0 exactly; 0: the
+                          * lattice sum m0_grid, which overestimates m0 when L spans only a
+                          * few wavelengths of k1 (1.75 m0 for Fig. 6 at L = 2π) (1) */
 } ljgap_sim_opts;
 
 void ljgap_sim_opts_default(ljgap_sim_opts *o);
@@ -48,11 +53,15 @@ typedef struct {
                           * there is no hysteresis) */
     double *residual;    /* owned: largest final residual over realizations, per gap */
     int *jump;           /* owned: 1 where some realization jumped between branches
-                          * between this gap and the previous (larger) one on the way in */
+                          * between this gap and the previous (larger) one on the way in
+                          * (its solver met negative curvature). Never when 2*pi/L > k0:
+                          * the energy is then convex, the solution unique, and the
+                          * outward sweep is skipped (sigma_out = sigma) */
     int realizations;
     double *m0_realized; /* owned: height variance of each realization */
     double m0_target;    /* variance of the PSD (the continuum m0) */
-    double m0_grid;      /* the part of it carried by the grid's wavevectors */
+    double m0_grid;      /* the lattice sum Σ_q P(|q|)(2π/L)² over the grid's wavevectors
+                          * (before any match_m0 scaling) */
     double L;            /* side actually used */
     int n;               /* grid actually used */
 } ljgap_sim_result;
