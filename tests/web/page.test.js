@@ -1,0 +1,244 @@
+// page.test.js -- the page in web/ in headless Debian chromium (playwright-core, no downloaded
+// browser), against build/ljgapd (or $BUILD/ljgapd) on a port the kernel picks.
+//   node --test tests/web/page.test.js            (from the repository root; BUILD=... to choose)
+// Checks: the page loads under its Content-Security-Policy with the vendored uPlot; presets draw
+// (canvas pixels inked, readouts filled, numbers against theory.md §4's reference values); hover
+// readouts; a 422 problem lands beside the field its pointer names; exports (CSV, JSON, PNG,
+// "copy as curl" re-run with curl gives the same numbers); no console error; no request leaves
+// the local server. Leaves screenshots in $BUILD/web-screenshot*.png.
+"use strict";
+
+const { test, before, after } = require("node:test");
+const assert = require("node:assert/strict");
+const { spawn, execFileSync } = require("node:child_process");
+const fs = require("node:fs");
+const os = require("node:os");
+const path = require("node:path");
+
+const ROOT = path.resolve(__dirname, "../..");
+const BUILD = path.resolve(ROOT, process.env.BUILD || "build");
+const CHROMIUM = process.env.CHROMIUM || "/usr/bin/chromium";
+const { chromium } = require(path.join(ROOT, "web/node_modules/playwright-core"));
+
+let daemon;
+let origin;
+let ctx;
+let page;
+let userDir;
+const consoleErrors = [];
+const requests = [];
+const foreign = [];
+
+function startDaemon() {
+  return new Promise((resolve, reject) => {
+    const bin = path.join(BUILD, "ljgapd");
+    daemon = spawn(bin, ["--port", "0", "--web", "web"], { cwd: ROOT, stdio: ["ignore", "pipe", "pipe"] });
+    let out = "";
+    const timer = setTimeout(() => reject(new Error(`${bin} did not say where it listens`)), 10000);
+    daemon.stdout.on("data", (d) => {
+      out += d;
+      const m = out.match(/^listening on (http:\/\/127\.0\.0\.1:\d+)\//m);
+      if (m) {
+        clearTimeout(timer);
+        resolve(m[1]);
+      }
+    });
+    daemon.stderr.resume();
+    daemon.on("error", reject);
+  });
+}
+
+before(async () => {
+  origin = await startDaemon();
+  userDir = fs.mkdtempSync(path.join(os.tmpdir(), "ljgap-web-"));
+  ctx = await chromium.launchPersistentContext(userDir, {
+    executablePath: CHROMIUM,
+    headless: true,
+    acceptDownloads: true,
+    viewport: { width: 1400, height: 1000 },
+    args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+      "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+  });
+  await ctx.grantPermissions(["clipboard-read", "clipboard-write"], { origin });
+  // Every request of the page must go to the local server; anything else is recorded and refused.
+  await ctx.route("**/*", (route) => {
+    const url = route.request().url();
+    requests.push(url);
+    if (new URL(url).origin === origin || url.startsWith("blob:") || url.startsWith("data:")) return route.continue();
+    foreign.push(url);
+    return route.abort();
+  });
+  page = ctx.pages()[0] || (await ctx.newPage());
+  page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text()); });
+  page.on("pageerror", (e) => consoleErrors.push(String(e)));
+  await page.addInitScript(() => {
+    window.__csp = [];
+    document.addEventListener("securitypolicyviolation", (e) => window.__csp.push(e.violatedDirective));
+  });
+  await page.goto(`${origin}/`);
+});
+
+after(async () => {
+  if (ctx) await ctx.close();
+  if (daemon) daemon.kill("SIGTERM");
+  if (userDir) fs.rmSync(userDir, { recursive: true, force: true });
+});
+
+/* Click a preset (or Compute) and wait until the status line says the run ended. */
+async function runAndWait(selector) {
+  await page.click(selector);
+  await page.waitForFunction(() => {
+    const s = document.getElementById("status-text").textContent;
+    return document.getElementById("busy").hidden && !/^Ready/.test(s);
+  }, null, { timeout: 60000 });
+  return page.textContent("#status-text");
+}
+
+const inked = (id) => page.evaluate((i) => LJPlots.inked(document.getElementById(i)), id);
+const num = (s) => Number(String(s).trim());
+
+test("the page loads under default-src 'self' with the vendored uPlot", async () => {
+  const csp = await page.getAttribute('meta[http-equiv="Content-Security-Policy"]', "content");
+  assert.match(csp, /default-src 'self'/);
+  assert.equal(await page.evaluate(() => typeof uPlot), "function");
+  assert.equal(await page.evaluate(() => document.querySelectorAll("[data-preset]").length), 7);
+  // the PSD of the default form is drawn before any request
+  assert.ok((await inked("plot-psd")) > 200, "PSD canvas is blank");
+});
+
+test("Fig. 4 preset: traction curve, g_eq and sigma_max marked, readouts match theory.md §4", async () => {
+  const status = await runAndWait('[data-preset="fig4"]');
+  assert.match(status, /^Done/);
+  const cells = await page.$$eval("#readout-traction table tr", (rows) =>
+    rows.map((r) => [...r.children].map((c) => c.textContent)));
+  const byName = Object.fromEntries(cells.map((r) => [r[0], r.slice(1)]));
+  // theory.md §4 (two discretisations and Monte Carlo): g_eq 2.6028, sigma_max 0.10126 at 3.059
+  assert.ok(Math.abs(num(byName["g̃eq"][0]) - 2.6028) < 2e-4, `g_eq ${byName["g̃eq"][0]}`);
+  assert.ok(Math.abs(num(byName["σ̄max/σ0"][0]) - 0.10126) < 2e-5);
+  assert.ok(Math.abs(num(byName["at g̃ave"][0]) - 3.059) < 2e-3);
+  assert.ok(Math.abs(num(byName["Δγeff/Δγ"][0]) - 0.2015) < 5e-4);
+  assert.match(byName["g̃eq"][1], /^± \d\.\de-\d+$/, "error estimate shown");
+  assert.match(await page.textContent("#readout-traction"), /method pde · [\d.]+ ms/);
+  assert.ok((await inked("plot-traction")) > 2000, "traction canvas is blank");
+  assert.ok((await inked("plot-psd")) > 200, "PSD canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")));
+  assert.equal(fig.series.length, 3);
+  assert.equal(fig.series[0].x.length, 200);
+  assert.deepEqual(fig.marks.map((m) => m.type), ["vline", "point"]);
+  // hover: uPlot's legend reads out every series at the cursor
+  const box = await page.locator("#plot-traction .u-over").boundingBox();
+  await page.mouse.move(box.x + box.width * 0.5, box.y + box.height * 0.5);
+  const values = await page.$$eval("#plot-traction .u-legend .u-value", (v) => v.map((e) => e.textContent));
+  assert.ok(values.length >= 3 && values.slice(0, 3).every((v) => Number.isFinite(Number(v))), `legend ${values}`);
+});
+
+test("Fig. 3 preset: five gap PDFs, unit mass, peaks of theory.md §4", async () => {
+  assert.match(await runAndWait('[data-preset="fig3"]'), /^Done/);
+  assert.ok((await inked("plot-pdf")) > 2000, "PDF canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-pdf")));
+  assert.deepEqual(fig.series.map((s) => s.name), ["k̃2 = 5", "k̃2 = 20", "k̃2 = 110", "k̃2 = 580", "k̃2 = ∞"]);
+  const peaks = fig.series.map((s) => Math.max(...s.y.filter((v) => v !== null)));
+  const expected = [6.86, 5.24, 3.71, 3.11, 2.97]; // theory.md §4, peak of Φ
+  peaks.forEach((p, i) => assert.ok(Math.abs(p - expected[i]) < 0.03, `peak ${i}: ${p}`));
+  const masses = await page.$$eval("#readout-pdf table tr td:nth-child(2)", (t) => t.map((e) => Number(e.textContent)));
+  assert.equal(masses.length, 5);
+  masses.forEach((m) => assert.ok(Math.abs(m - 1) < 1e-3, `mass ${m}`));
+});
+
+test("Fig. 2 preset: the paper's iteration, one PDF per Vmax", async () => {
+  assert.match(await runAndWait('[data-preset="fig2"]'), /^Done: 4 requests/);
+  assert.ok((await inked("plot-pdf")) > 2000, "PDF canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-pdf")));
+  assert.deepEqual(fig.series.map((s) => s.name),
+    ["0.1", "0.05", "0.025", "0.0025"].map((v) => `Vmax = ${v}, k̃2 = 5`));
+  const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("pdf")));
+  assert.deepEqual(json.requests.map((r) => r.body.vmax), [0.1, 0.05, 0.025, 0.0025]);
+  assert.ok(json.requests.every((r) => r.body.method === "paper" && r.body.psd.C === 0.0795775));
+});
+
+test("Fig. 5 preset: sweep on a log axis, Δγeff and σ̄max fall as m̃0 grows", async () => {
+  assert.match(await runAndWait('[data-preset="fig5a"]'), /^Done/);
+  assert.ok((await inked("plot-sweep")) > 1000, "sweep canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-sweep")));
+  assert.equal(fig.xLog, true);
+  for (const s of fig.series) {
+    assert.equal(s.y.length, 13);
+    for (let i = 1; i < s.y.length; i++) assert.ok(s.y[i] < s.y[i - 1], `${s.name} not falling at ${i}`);
+  }
+  // the flat surface (m0 -> 0) bounds both from above (theory.md §2)
+  assert.ok(fig.series.every((s) => s.y.every((v) => v > 0 && v < 1)));
+});
+
+test("a 422 problem appears beside the field its pointer names", async () => {
+  await page.click('[data-preset="fig4"]');
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
+  await page.fill("#k1", "0.3");
+  await page.fill("#g-n", "many");
+  const before422 = consoleErrors.length;
+  const status = await runAndWait("#compute");
+  // chromium logs the 422 answer itself as a console error: that one, and only that, is expected
+  const logged = consoleErrors.splice(before422);
+  assert.ok(logged.length <= 1 && logged.every((m) => /status of 422/.test(m)), String(logged));
+  assert.match(status, /problem/);
+  assert.match(await page.textContent('.err[data-for="k1"]'), /k0 = 0\.46978/);
+  assert.match(await page.textContent('.err[data-for="g-n"]'), /number/);
+  assert.equal(await page.getAttribute("#k1", "aria-invalid"), "true");
+  assert.equal(await page.textContent('.err[data-for="exp"]'), "");
+  // and the error goes away once the field is edited
+  await page.fill("#k1", "1");
+  assert.equal(await page.textContent('.err[data-for="k1"]'), "");
+});
+
+test("exports: CSV, JSON, PNG of the plot and copy as curl with the exact request", async () => {
+  assert.match(await runAndWait('[data-preset="fig4"]'), /^Done/);
+  const save = async (sel) => {
+    const [dl] = await Promise.all([page.waitForEvent("download"), page.click(sel)]);
+    return fs.readFileSync(await dl.path());
+  };
+  const csv = (await save('[data-panel="traction"] [data-export="csv"]')).toString().trim().split("\n");
+  assert.equal(csv[0], "series,g_ave,value,error");
+  assert.ok(csv.length > 400, `${csv.length} CSV lines`);
+  const json = JSON.parse(await save('[data-panel="traction"] [data-export="json"]'));
+  assert.equal(json.series.length, 3);
+  assert.equal(json.requests[0].url, `${origin}/v1/traction`);
+  const png = await save('[data-panel="traction"] [data-export="png"]');
+  assert.deepEqual([...png.subarray(0, 8)], [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
+  assert.ok(png.length > 5000);
+  await page.click('[data-panel="traction"] [data-export="copy-as-curl"]');
+  const curl = await page.inputValue("#curl-text");
+  assert.match(curl, new RegExp(`^curl -s ${origin}/v1/traction `));
+  await page.click("#curl-dialog button");
+  // the command, run by a shell, answers what the page plotted
+  const answer = JSON.parse(execFileSync("bash", ["-c", curl]).toString());
+  assert.deepEqual(answer.sigma, json.answers[0].sigma);
+  assert.deepEqual(answer.summary, json.answers[0].summary);
+});
+
+test("material and sphere radius: SI values and the contact panel", async () => {
+  await page.click('[data-preset="fig4"]');
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
+  await page.check("#use-material");
+  await page.fill("#R", "1e-6");
+  assert.match(await runAndWait("#compute"), /^Done: 2 requests/);
+  const contact = await page.textContent("#readout-contact");
+  assert.match(contact, /JKR with Δγeff/);
+  assert.match(contact, /regime/);
+  assert.match(await page.textContent("#readout-traction"), /J\/m²/);
+  await page.evaluate(() => window.scrollTo(0, 0));
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-contact.png"), fullPage: true });
+});
+
+test("all panels for the screenshot; no console error, no CSP violation, nothing left the server", async () => {
+  await page.uncheck("#use-material");
+  await runAndWait('[data-preset="fig3"]');
+  await page.check("#do-traction");
+  await page.check("#do-sweep");
+  assert.match(await runAndWait("#compute"), /^Done/);
+  await page.evaluate(() => window.scrollTo(0, 0));
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot.png"), fullPage: true });
+  assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(await page.evaluate(() => window.__csp), []);
+  assert.deepEqual(foreign, []);
+  assert.ok(requests.length > 10);
+  for (const u of requests) assert.ok(u.startsWith(origin + "/") || u.startsWith("blob:"), u);
+});

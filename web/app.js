@@ -1,0 +1,858 @@
+/* app.js -- the ljgap page: form -> JSON requests -> plots, readouts and exports.
+ *
+ * The form is turned into the requests of shared/docs/api.md (traction, pdf, sweep, contact),
+ * which run one after another (the server has few compute slots; a 503 is retried after its
+ * Retry-After). The server is the only validator of values: text that is not a number is sent as
+ * it is, and each problem+json error is shown beside the field whose data-ptr names its JSON
+ * pointer (longest prefix wins; a pointer no field claims goes to the panel's readout). Each panel
+ * keeps its requests, answers and plotted series, which the export buttons write out as CSV, JSON
+ * and PNG, or as curl commands that repeat the exact requests.
+ */
+"use strict";
+
+(() => {
+  const $ = (id) => document.getElementById(id);
+  const fmt = LJPlots.fmt;
+  const errFmt = LJPlots.errFmt;
+  const COLORS = ["#1f5fbf", "#d1495b", "#2e933c", "#8e44ad", "#e67e22", "#16a085", "#555"];
+  const K0 = Math.cbrt(324 / 3125); /* theory.md §1: the instability (19) below k̃0 */
+  const RETRIES = 40; /* 503 answers retried before giving up (Retry-After s apart) */
+
+  /* ---- small helpers ---- */
+
+  /* A number from text; text that is no number goes to the server as it is (it answers 422). */
+  function val(text) {
+    const t = String(text).trim();
+    if (t === "") return undefined;
+    if (/^(∞|inf|infinity|null)$/i.test(t)) return null;
+    const x = Number(t);
+    return Number.isFinite(x) ? x : t;
+  }
+  const field = (id) => val($(id).value);
+  const list = (text) =>
+    String(text)
+      .split(/[,;\s]+/)
+      .filter((t) => t !== "")
+      .map(val);
+  const el = (tag, attrs = {}, ...kids) => {
+    const e = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs)) {
+      if (k === "class") e.className = v;
+      else e.setAttribute(k, v);
+    }
+    for (const k of kids) e.append(k instanceof Node ? k : document.createTextNode(String(k)));
+    return e;
+  };
+
+  class ClientError extends Error {
+    constructor(fieldId, message) {
+      super(message);
+      this.fieldId = fieldId;
+    }
+  }
+
+  /* ---- form -> requests ---- */
+
+  /* The table PSD from CSV text: two numbers a line; '#' comments and non-numeric header lines
+   * are skipped. */
+  function parseTable(text) {
+    const k = [];
+    const P = [];
+    const lines = text.split(/\r?\n/);
+    for (let i = 0; i < lines.length; i++) {
+      const line = lines[i].replace(/#.*/, "").trim();
+      if (line === "") continue;
+      const cells = line.split(/[,;\t ]+/).filter((c) => c !== "");
+      const nums = cells.map(Number);
+      if (cells.length >= 2 && nums.slice(0, 2).every(Number.isFinite)) {
+        k.push(nums[0]);
+        P.push(nums[1]);
+      } else if (k.length === 0 && cells.some((c) => !Number.isFinite(Number(c)))) {
+        continue; /* a header line */
+      } else {
+        throw new ClientError("table", `line ${i + 1}: expected two numbers "k, P", got "${line}"`);
+      }
+    }
+    if (k.length === 0) throw new ClientError("table", "no (k, P) rows in the table");
+    return { k, P };
+  }
+
+  function psdObject() {
+    if (document.querySelector('input[name="kind"]:checked').value === "table") {
+      const psd = { kind: "table", ...parseTable($("table").value) };
+      const q = field("tail");
+      if (q !== undefined) psd.tail = { exponent: q };
+      return psd;
+    }
+    const psd = { kind: "power" };
+    psd[$("exp-kind").value] = field("exp");
+    psd[$("level-kind").value] = field("level");
+    psd.k1 = field("k1");
+    if (!$("k2-inf").checked) psd.k2 = field("k2");
+    return psd;
+  }
+
+  function materialObject() {
+    if (!$("use-material").checked) return undefined;
+    const m = {};
+    if ($("modulus-kind").value === "E_star") m.E_star = field("E_star");
+    else for (const id of ["E1", "nu1", "E2", "nu2"]) m[id] = field(id);
+    m.dgamma = field("dgamma");
+    m.epsilon = field("epsilon");
+    return m;
+  }
+
+  /* Fields every compute request shares. */
+  function common() {
+    const c = { psd: psdObject() };
+    const method = $("method").value;
+    if (method !== "pde") c.method = method;
+    const tol = field("tol");
+    if (tol !== undefined) c.tol = tol;
+    if (method === "paper") {
+      const v = list($("vmax").value);
+      if (v.length) c.vmax = v[0];
+    }
+    if (method === "montecarlo") {
+      const s = field("samples");
+      const seed = field("seed");
+      if (s !== undefined) c.samples = s;
+      if (seed !== undefined) c.seed = seed;
+    }
+    const m = materialObject();
+    if (m) c.material = m;
+    if ($("units").value === "SI" && c.psd.kind === "power") c.units = "SI";
+    if ($("units").value === "SI" && c.psd.kind === "table") c.units = "SI";
+    return c;
+  }
+
+  /* Every request the form asks for, by panel, in the order they run. */
+  function buildRequests() {
+    const base = common();
+    const out = [];
+    if ($("do-traction").checked) {
+      out.push({
+        panel: "traction",
+        endpoint: "traction",
+        body: { ...base, g_ave: { min: field("g-min"), max: field("g-max"), n: field("g-n") } },
+      });
+    }
+    if ($("do-pdf").checked) {
+      const body = { ...base, g_ave: field("pdf-g"), k2: list($("pdf-k2").value) };
+      const grid = { min: field("grid-min"), max: field("grid-max"), n: field("grid-n") };
+      if (Object.values(grid).some((v) => v !== undefined)) body.grid = grid;
+      const vmaxes = base.method === "paper" ? list($("vmax").value) : [];
+      if (vmaxes.length > 1) {
+        for (const v of vmaxes) {
+          out.push({ panel: "pdf", endpoint: "pdf", body: { ...body, vmax: v }, label: `Vmax = ${v}` });
+        }
+      } else {
+        out.push({ panel: "pdf", endpoint: "pdf", body });
+      }
+    }
+    if ($("do-sweep").checked) {
+      out.push({
+        panel: "sweep",
+        endpoint: "sweep",
+        body: { ...base, vary: $("vary").value, values: list($("values").value) },
+      });
+    }
+    if (base.material && field("R") !== undefined) {
+      out.push({ panel: "contact", endpoint: "contact", body: { ...base, R: field("R") } });
+    }
+    return out;
+  }
+
+  /* ---- problems beside their fields ---- */
+
+  const claims = []; /* [pointer prefix, element id, panel or null] */
+  function collectClaims() {
+    for (const e of document.querySelectorAll("[data-ptr]")) {
+      /* data-panel: the pointer means this field only in that panel's request (/g_ave) */
+      for (const p of e.dataset.ptr.split(/\s+/)) claims.push([p, e.id, e.dataset.panel || null]);
+    }
+  }
+
+  function fieldFor(pointer, panel) {
+    let best = null;
+    let bestLen = -1;
+    for (const [p, id, only] of claims) {
+      if (only && only !== panel) continue;
+      if (pointer === p || pointer.startsWith(p + "/")) {
+        const n = p.length + (only ? 0.5 : 0);
+        if (n > bestLen) {
+          best = id;
+          bestLen = n;
+        }
+      }
+    }
+    if (best === null && pointer.startsWith("/psd")) best = "psd-general";
+    return best;
+  }
+
+  function errorSpan(id) {
+    return document.querySelector(`.err[data-for="${id}"]`);
+  }
+
+  function showFieldError(id, message) {
+    const span = errorSpan(id);
+    const input = $(id);
+    if (input && input.tagName !== "SPAN") {
+      input.classList.add("invalid");
+      input.setAttribute("aria-invalid", "true");
+    }
+    if (!span) return false;
+    if (!span.textContent.includes(message)) {
+      span.textContent = span.textContent ? `${span.textContent}; ${message}` : message;
+    }
+    return true;
+  }
+
+  function clearErrors() {
+    for (const s of document.querySelectorAll(".err")) s.textContent = "";
+    for (const i of document.querySelectorAll(".invalid")) {
+      i.classList.remove("invalid");
+      i.removeAttribute("aria-invalid");
+    }
+  }
+
+  /* Problems of one answer: beside their fields; the rest as text for the panel. */
+  function placeProblem(problem, panel) {
+    const loose = [];
+    for (const e of problem.errors || []) {
+      const id = fieldFor(e.pointer || "", panel);
+      if (!id || !showFieldError(id, e.detail)) loose.push(`${e.pointer}: ${e.detail}`);
+    }
+    if (!(problem.errors || []).length) loose.push(problem.detail || problem.title);
+    return loose;
+  }
+
+  /* ---- talking to the server ---- */
+
+  let abort = null;
+  let tick = null;
+
+  function setBusy(text) {
+    const t0 = performance.now();
+    $("busy").hidden = false;
+    $("cancel").hidden = false;
+    $("status").classList.remove("error");
+    clearInterval(tick);
+    const show = () => {
+      $("status-text").textContent = `${text} … ${((performance.now() - t0) / 1000).toFixed(1)} s`;
+    };
+    show();
+    tick = setInterval(show, 100);
+  }
+
+  function setIdle(text, isError) {
+    clearInterval(tick);
+    $("busy").hidden = true;
+    $("cancel").hidden = true;
+    $("status-text").textContent = text;
+    $("status").classList.toggle("error", !!isError);
+  }
+
+  const sleep = (ms, signal) =>
+    new Promise((resolve, reject) => {
+      const t = setTimeout(resolve, ms);
+      signal.addEventListener("abort", () => {
+        clearTimeout(t);
+        reject(new DOMException("cancelled", "AbortError"));
+      });
+    });
+
+  /* POST the exact text to /v1/endpoint; retries 503 after Retry-After. -> {status, json} */
+  async function post(endpoint, text, signal) {
+    for (let attempt = 0; ; attempt++) {
+      const r = await fetch(`/v1/${endpoint}`, {
+        method: "POST",
+        headers: { "Content-Type": "application/json" },
+        body: text,
+        signal,
+      });
+      if (r.status === 503 && attempt < RETRIES) {
+        const s = Number(r.headers.get("Retry-After")) || 1;
+        await r.text();
+        await sleep(1000 * Math.min(s, 10), signal);
+        continue;
+      }
+      let json = null;
+      try {
+        json = await r.json();
+      } catch (e) {
+        json = { title: `HTTP ${r.status}`, detail: "the answer was not JSON" };
+      }
+      return { status: r.status, json };
+    }
+  }
+
+  /* ---- panels ---- */
+
+  const panels = {}; /* name -> {title, requests:[{endpoint,text,label}], answers:[], series:[], xName} */
+  const panelNames = ["traction", "pdf", "sweep", "psd", "contact", "jobs"];
+  const plotTitles = {
+    traction: "Mean traction against mean gap",
+    pdf: "Gap probability density",
+    sweep: "Sweep",
+    psd: "Power spectral density",
+    contact: "Sphere contact",
+    jobs: "Numerical model against the statistical theory",
+  };
+
+  function resetPanel(name) {
+    panels[name] = { title: plotTitles[name], requests: [], answers: [], series: [], xName: "x" };
+  }
+
+  function metaLine(ans) {
+    const m = ans.meta || {};
+    const parts = [`${m.method || "?"}`, `${fmt(m.elapsed_ms, 3)} ms`];
+    if (m.cached) parts.push("cached");
+    return el("div", { class: "meta" }, `method ${parts.join(" · ")} (version ${m.version || "?"})`);
+  }
+
+  function warnings(ans) {
+    const w = (ans.meta && ans.meta.warnings) || [];
+    return w.map((t) => el("div", { class: "warn" }, `⚠ ${t}`));
+  }
+
+  function row(name, value, err, si) {
+    const tr = el("tr", {}, el("th", {}, name), el("td", {}, fmt(value)));
+    tr.append(el("td", {}, err === undefined ? "" : `± ${errFmt(err)}`));
+    if (si !== undefined) tr.append(el("td", {}, si));
+    return tr;
+  }
+
+  function summaryTable(s, e, si) {
+    e = e || {};
+    si = si || {};
+    const siv = (k, unit) => (si[k] !== undefined ? `${fmt(si[k], 4)} ${unit}` : undefined);
+    return el(
+      "table",
+      {},
+      row("g̃eq", s.g_eq, e.g_eq, siv("g_eq_m", "m")),
+      row("σ̄max/σ0", s.sigma_max, e.sigma_max, siv("sigma_max_Pa", "Pa")),
+      row("at g̃ave", s.g_at_max, e.g_at_max, siv("g_at_max_m", "m")),
+      row("Δγeff/Δγ", s.dgamma_eff, e.dgamma_eff, siv("dgamma_eff_J_m2", "J/m²")),
+      row("m̃0", s.m0, undefined, siv("m0_m2", "m²"))
+    );
+  }
+
+  const flatLJ = (g) => (3 * Math.sqrt(3) / 2) * (Math.pow(g, -3) - Math.pow(g, -9));
+  const maxAbs = (a) => a.reduce((m, v) => Math.max(m, Math.abs(v)), 0);
+
+  function showTraction(p, ans) {
+    const s = ans.summary;
+    const g = ans.g_ave;
+    const area = g.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? ans.sigma[i] : null));
+    const flat = g.map(flatLJ);
+    p.xName = "g_ave";
+    p.series = [
+      { name: "σ̄/σ0 (rough)", x: g, y: ans.sigma, err: ans.error.sigma, color: COLORS[0] },
+      { name: "σ/σ0 flat LJ (8)", x: g, y: flat, color: "#777", dash: [6, 4], width: 1.5 },
+      {
+        name: "Δγeff area",
+        x: g,
+        y: area,
+        color: "rgba(31,95,191,0.0)",
+        fill: "rgba(31,95,191,0.18)",
+        width: 0,
+      },
+    ];
+    const pos = Math.max(...ans.sigma.filter(Number.isFinite), ...flat);
+    const marks = [];
+    if (s.g_eq !== null) {
+      marks.push({ type: "vline", x: s.g_eq, label: `g̃eq = ${fmt(s.g_eq, 4)}`, color: "#2e933c" });
+    }
+    if (s.sigma_max !== null) {
+      marks.push({
+        type: "point",
+        x: s.g_at_max,
+        y: s.sigma_max,
+        label: `σ̄max/σ0 = ${fmt(s.sigma_max, 4)}`,
+        color: "#d1495b",
+      });
+    }
+    LJPlots.draw($("plot-traction"), {
+      title: plotTitles.traction,
+      xLabel: "g̃ave",
+      xName: "g̃ave",
+      yLabel: "σ̄/σ0",
+      series: p.series,
+      marks,
+      yClamp: [-1.5 * pos, 1.05],
+    });
+    const ro = $("readout-traction");
+    ro.replaceChildren(
+      summaryTable(s, ans.error.summary, ans.si && ans.si.summary),
+      el(
+        "div",
+        { class: "meta" },
+        `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)`
+      ),
+      metaLine(ans),
+      ...warnings(ans)
+    );
+  }
+
+  function k2Label(k) {
+    return k === null ? "∞" : String(k);
+  }
+
+  function showPdf(p, results) {
+    p.xName = "g";
+    p.series = [];
+    const ro = $("readout-pdf");
+    const t = el("table", {}, el("tr", {}, ...["curve", "mass", "mean", "σ̄/σ0", "± err", "‖ΔΦ‖₁ err"].map((h) => el("th", {}, h))));
+    const metas = [];
+    let c = 0;
+    for (const { ans, label } of results) {
+      ans.pdfs.forEach((pdf, i) => {
+        const name = label ? `${label}, k̃2 = ${k2Label(pdf.k2)}` : `k̃2 = ${k2Label(pdf.k2)}`;
+        const e = (ans.error.pdfs || [])[i] || {};
+        p.series.push({ name, x: pdf.g, y: pdf.phi, color: COLORS[c++ % COLORS.length], errL1: e.phi_l1 });
+        t.append(
+          el(
+            "tr",
+            {},
+            el("td", {}, name),
+            el("td", {}, fmt(pdf.mass)),
+            el("td", {}, fmt(pdf.mean)),
+            el("td", {}, fmt(pdf.sigma)),
+            el("td", {}, errFmt(e.sigma)),
+            el("td", {}, errFmt(e.phi_l1))
+          )
+        );
+      });
+      metas.push(metaLine(ans), ...warnings(ans));
+    }
+    LJPlots.draw($("plot-pdf"), {
+      title: `${plotTitles.pdf} at g̃ave = ${fmt(results[0].body.g_ave)}`,
+      xLabel: "g̃",
+      xName: "g̃",
+      yLabel: "Φ(g̃)",
+      series: p.series,
+      yZero: true,
+    });
+    ro.replaceChildren(t, ...metas);
+  }
+
+  function showSweep(p, ans, body) {
+    const x = ans.values;
+    const r = ans.results;
+    const get = (k) => r.map((o) => (o ? o[k] : null));
+    const errs = (k) => r.map((o) => (o && o.error ? o.error[k] : null));
+    const names = { m0: "m̃0", C: "C", D: "D", k1: "k̃1" };
+    p.xName = ans.vary;
+    p.series = [
+      { name: "Δγeff/Δγ", x, y: get("dgamma_eff"), err: errs("dgamma_eff"), color: COLORS[0], points: true },
+      { name: "σ̄max/σ0", x, y: get("sigma_max"), err: errs("sigma_max"), color: COLORS[1], points: true },
+    ];
+    const logX = ans.vary !== "D" && x.every((v) => v > 0);
+    LJPlots.draw($("plot-sweep"), {
+      title: `${plotTitles.sweep} over ${names[ans.vary] || ans.vary}`,
+      xLabel: names[ans.vary] || ans.vary,
+      xName: names[ans.vary] || ans.vary,
+      yLabel: "Δγeff/Δγ, σ̄max/σ0",
+      xLog: logX,
+      series: p.series,
+      yZero: true,
+    });
+    const t = el("table", {}, el("tr", {}, ...[names[ans.vary] || ans.vary, "g̃eq", "σ̄max/σ0", "Δγeff/Δγ", "largest ± err"].map((h) => el("th", {}, h))));
+    r.forEach((o, i) => {
+      const e = (o && o.error) || {};
+      const worst = Math.max(...["g_eq", "sigma_max", "dgamma_eff"].map((k) => Math.abs(e[k] || 0)));
+      t.append(el("tr", {}, el("td", {}, fmt(x[i])), el("td", {}, fmt(o && o.g_eq)), el("td", {}, fmt(o && o.sigma_max)), el("td", {}, fmt(o && o.dgamma_eff)), el("td", {}, errFmt(worst))));
+    });
+    const worstAll = Math.max(...r.map((o) => Math.max(...Object.values((o && o.error) || {}).map(Math.abs))));
+    const details = el("details", {}, el("summary", {}, `${x.length} points, largest error ${errFmt(worstAll)}: table`), t);
+    $("readout-sweep").replaceChildren(details, metaLine(ans), ...warnings(ans));
+  }
+
+  /* The PSD as the form gives it (client side: a picture of the input, with its cut-offs). */
+  function showPsd(req, traction) {
+    const p = panels.psd;
+    const psd = req.psd;
+    const si = req.units === "SI";
+    const marks = [];
+    let k0 = si ? null : K0;
+    if (si && traction && traction.si && traction.si.chi_m) k0 = K0 / traction.si.chi_m;
+    p.xName = "k";
+    const logspace = (a, b, n) => Array.from({ length: n }, (_, i) => a * Math.pow(b / a, i / (n - 1)));
+    const notes = [];
+    if (psd.kind === "table") {
+      p.series = [{ name: "P̃S table", x: psd.k, y: psd.P, color: COLORS[0], points: true }];
+      const q = psd.tail && psd.tail.exponent;
+      const n = psd.k.length;
+      if (typeof q === "number" && n) {
+        const kk = logspace(psd.k[n - 1], psd.k[n - 1] * 100, 40);
+        p.series.push({ name: `tail ∝ k^${q}`, x: kk, y: kk.map((k) => psd.P[n - 1] * Math.pow(k / psd.k[n - 1], q)), color: COLORS[1], dash: [6, 4] });
+      }
+      marks.push({ type: "vline", x: psd.k[0], label: "first k", color: "#2e933c" });
+    } else {
+      const D = psd.D !== undefined ? psd.D : 3 - psd.H;
+      const k1 = psd.k1;
+      const k2 = psd.k2 === undefined ? null : psd.k2;
+      if (![D, k1].every((v) => typeof v === "number") || (k2 !== null && typeof k2 !== "number")) {
+        LJPlots.clear($("plot-psd"));
+        $("readout-psd").textContent = "Give D (or H) and the cut-offs as numbers to see the spectrum.";
+        return;
+      }
+      const a = 2 * D - 6; /* m0 = 2πC ∫ k^(2D−7) dk = 2πC (k2^a − k1^a)/a */
+      const band = (k2 === null ? 0 - Math.pow(k1, a) : Math.pow(k2, a) - Math.pow(k1, a)) / a;
+      let C = psd.C;
+      if (C === undefined && typeof psd.m0 === "number") C = psd.m0 / (2 * Math.PI * band);
+      if (C === undefined && typeof psd.h_rms === "number") C = (psd.h_rms * psd.h_rms) / (2 * Math.PI * band);
+      if (typeof C !== "number" || !(C > 0) || !(band > 0)) {
+        LJPlots.clear($("plot-psd"));
+        $("readout-psd").textContent = "The level or the exponent is not usable for a picture (k̃2 = ∞ needs D < 3).";
+        return;
+      }
+      const top = k2 === null ? k1 * 1000 : k2;
+      const kk = logspace(k1, top, 80);
+      p.series = [{ name: `C k^(2D−8), D = ${fmt(D)}`, x: kk, y: kk.map((k) => C * Math.pow(k, 2 * D - 8)), color: COLORS[0] }];
+      marks.push({ type: "vline", x: k1, label: si ? "k1" : "k̃1", color: "#2e933c" });
+      if (k2 !== null) marks.push({ type: "vline", x: k2, label: si ? "k2" : "k̃2", color: "#2e933c" });
+      else notes.push("k̃2 = ∞: drawn to 1000 k̃1");
+      notes.push(`C = ${fmt(C)}${psd.C === undefined ? " (from the level given)" : ""}`);
+    }
+    if (k0 !== null) marks.push({ type: "vline", x: k0, label: si ? "k0 = 0.46978/χ" : "k̃0 (instability)", color: "#d1495b", dash: [2, 3], row: 1 });
+    if (traction) notes.push(`m̃0 = ${fmt(traction.summary.m0)} (server)`);
+    /* the x range takes in k̃0 so that the distance of k̃1 from the instability shows */
+    const xs = p.series.flatMap((s) => s.x).concat(k0 !== null ? [k0] : []);
+    const xRange = [Math.min(...xs) / 1.5, Math.max(...xs) * 1.5];
+    LJPlots.draw($("plot-psd"), {
+      title: plotTitles.psd,
+      xLabel: si ? "k (1/m)" : "k̃",
+      xName: si ? "k" : "k̃",
+      yLabel: si ? "PS (m⁴)" : "P̃S",
+      xLog: true,
+      yLog: true,
+      xRange,
+      series: p.series,
+      marks,
+    });
+    $("readout-psd").replaceChildren(el("div", { class: "meta" }, notes.join(" · ") || "table as given"));
+  }
+
+  function showContact(p, ans) {
+    const e = ans.error || {};
+    const pe = e.pull_off_N || {};
+    const po = ans.pull_off_N || {};
+    const t = el("table", {}, el("tr", {}, el("th", {}, "pull-off"), el("th", {}, "N"), el("th", {}, "± err")));
+    const names = { jkr_smooth: "JKR, flat Δγ", jkr: "JKR with Δγeff", dmt: "DMT with Δγeff", maugis_dugdale: "Maugis–Dugdale" };
+    for (const k of Object.keys(po)) t.append(el("tr", {}, el("td", {}, names[k] || k), el("td", {}, fmt(po[k], 4)), el("td", {}, errFmt(pe[k]))));
+    const tb = ans.tabor || {};
+    t.append(el("tr", {}, el("td", {}, "Tabor μ (flat / effective)"), el("td", {}, `${fmt(tb.smooth, 4)} / ${fmt(tb.effective, 4)}`), el("td", {}, errFmt(e.tabor && e.tabor.effective))));
+    t.append(el("tr", {}, el("td", {}, "Maugis λ"), el("td", {}, fmt(ans.maugis_lambda, 4)), el("td", {}, errFmt(e.maugis_lambda))));
+    t.append(el("tr", {}, el("td", {}, "regime"), el("td", {}, ans.regime || "—"), el("td", {}, "")));
+    p.series = [{ name: "pull_off_N", x: Object.keys(po), y: Object.values(po), err: Object.keys(po).map((k) => pe[k]) }];
+    p.xName = "model";
+    $("card-contact").hidden = false;
+    $("readout-contact").replaceChildren(t, metaLine(ans), ...warnings(ans));
+  }
+
+  /* ---- running ---- */
+
+  let running = false;
+
+  async function run() {
+    if (running) return;
+    clearErrors();
+    let reqs;
+    try {
+      reqs = buildRequests();
+    } catch (e) {
+      if (e instanceof ClientError) {
+        showFieldError(e.fieldId, e.message);
+        setIdle("Fix the highlighted field.", true);
+        return;
+      }
+      throw e;
+    }
+    const base = common();
+    running = true;
+    $("compute").disabled = true;
+    abort = new AbortController();
+    /* panels not asked for this time keep their last result (and its exports) */
+    for (const n of new Set(reqs.map((r) => r.panel))) resetPanel(n);
+    resetPanel("psd");
+    if (!reqs.some((r) => r.panel === "contact")) $("card-contact").hidden = true;
+    showPsd(base, null);
+    const byPanel = {};
+    let failed = 0;
+    let done = 0;
+    try {
+      for (const r of reqs) {
+        const text = JSON.stringify(r.body);
+        const p = panels[r.panel];
+        p.requests.push({ endpoint: r.endpoint, text, label: r.label });
+        const card = $(`card-${r.panel}`);
+        card.classList.add("busy");
+        setBusy(`${r.endpoint}${r.label ? ` (${r.label})` : ""}: request ${done + 1} of ${reqs.length}`);
+        let res;
+        try {
+          res = await post(r.endpoint, text, abort.signal);
+        } finally {
+          card.classList.remove("busy");
+        }
+        done++;
+        p.answers.push(res.json);
+        if (res.status >= 200 && res.status < 300) {
+          (byPanel[r.panel] = byPanel[r.panel] || []).push({ ans: res.json, label: r.label, body: r.body });
+        } else {
+          failed++;
+          const loose = placeProblem(res.json || {}, r.panel);
+          const ro = $(`readout-${r.panel}`);
+          ro.replaceChildren(
+            el("div", { class: "problem" }, `${res.status} ${res.json.title || ""}: ${res.json.detail || ""}`),
+            ...loose.map((t) => el("div", { class: "problem" }, t))
+          );
+          if (r.panel === "contact") $("card-contact").hidden = false;
+          else if ($(`plot-${r.panel}`)) LJPlots.clear($(`plot-${r.panel}`));
+        }
+        const got = byPanel[r.panel];
+        if (got && got.length === reqs.filter((q) => q.panel === r.panel).length) {
+          const p0 = panels[r.panel];
+          if (r.panel === "traction") {
+            showTraction(p0, got[0].ans);
+            showPsd(base, got[0].ans);
+          } else if (r.panel === "pdf") showPdf(p0, got);
+          else if (r.panel === "sweep") showSweep(p0, got[0].ans, got[0].body);
+          else if (r.panel === "contact") showContact(p0, got[0].ans);
+        }
+      }
+      setIdle(failed ? `${failed} of ${reqs.length} requests answered with a problem: see the highlighted fields.` : `Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`, failed > 0);
+    } catch (e) {
+      if (e.name === "AbortError") setIdle("Cancelled.", true);
+      else setIdle(`Request failed: ${e.message}`, true);
+    } finally {
+      running = false;
+      $("compute").disabled = false;
+      abort = null;
+    }
+  }
+
+  /* ---- exports ---- */
+
+  function download(name, blob) {
+    const a = el("a", { href: URL.createObjectURL(blob), download: name });
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+  }
+
+  const csvCell = (v) => {
+    if (v === null || v === undefined) return "";
+    const s = String(v);
+    return /[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s;
+  };
+
+  /* Every plotted series of a panel, long form: series, x, y, error. */
+  function panelCSV(name) {
+    const p = panels[name];
+    const lines = [["series", p.xName, "value", "error"].map(csvCell).join(",")];
+    for (const s of p.series) {
+      s.x.forEach((x, i) => {
+        if (s.y[i] === null || s.y[i] === undefined) return;
+        lines.push([s.name, x, s.y[i], s.err ? s.err[i] : ""].map(csvCell).join(","));
+      });
+    }
+    return lines.join("\n") + "\n";
+  }
+
+  function panelJSON(name) {
+    const p = panels[name];
+    return JSON.stringify(
+      {
+        panel: name,
+        requests: p.requests.map((r) => ({ url: `${location.origin}/v1/${r.endpoint}`, label: r.label, body: JSON.parse(r.text) })),
+        answers: p.answers,
+        series: p.series.map((s) => ({ name: s.name, x: s.x, y: s.y, error: s.err, error_l1: s.errL1 })),
+      },
+      null,
+      1
+    );
+  }
+
+  const shellQuote = (s) => `'${s.replace(/'/g, `'\\''`)}'`;
+
+  function panelCurl(name) {
+    return panels[name].requests
+      .map((r) => `curl -s ${location.origin}/v1/${r.endpoint} -H 'Content-Type: application/json' -d ${shellQuote(r.text)}`)
+      .join("\n");
+  }
+
+  async function copyCurl(name) {
+    const text = panelCurl(name);
+    $("curl-text").value = text;
+    if (!$("curl-dialog").open) $("curl-dialog").showModal();
+    $("curl-text").select();
+    try {
+      await navigator.clipboard.writeText(text);
+      setIdle("curl command copied to the clipboard.");
+    } catch (e) {
+      setIdle("Select the text in the box and copy it (the browser refused clipboard access).");
+    }
+  }
+
+  function addExports() {
+    for (const box of document.querySelectorAll(".exports")) {
+      const name = box.dataset.panel;
+      const b = (label, fn) => {
+        const btn = el("button", { type: "button", "data-export": label.toLowerCase().replace(/ /g, "-") }, label);
+        btn.addEventListener("click", () => {
+          if (!panels[name] || (!panels[name].series.length && !panels[name].requests.length)) {
+            setIdle("Nothing to export yet: compute first.", true);
+            return;
+          }
+          fn();
+        });
+        box.append(btn);
+      };
+      b("CSV", () => download(`ljgap-${name}.csv`, new Blob([panelCSV(name)], { type: "text/csv" })));
+      b("JSON", () => download(`ljgap-${name}.json`, new Blob([panelJSON(name)], { type: "application/json" })));
+      if (name !== "contact") {
+        b("PNG", async () => {
+          const blob = await LJPlots.toPNG($(`plot-${name}`));
+          if (blob) download(`ljgap-${name}.png`, blob);
+        });
+      }
+      if (name !== "psd") b("Copy as curl", () => copyCurl(name));
+    }
+  }
+
+  /* ---- presets (README "Reproducing the paper's figures") ---- */
+
+  const C4 = "0.0795775"; /* 1/(4π): the paper's figures, theory.md §4 */
+  const defaults = {
+    kind: "power", "exp-kind": "D", exp: "2.5", "level-kind": "C", level: C4, k1: "1", k2: "",
+    "k2-inf": true, units: "", method: "pde", tol: "1e-6", vmax: "0.0025", samples: "100000",
+    seed: "1", "use-material": false, R: "", "do-traction": true, "g-min": "2.3", "g-max": "5",
+    "g-n": "200", "do-pdf": false, "pdf-g": "0.98", "pdf-k2": "5, 20, 110, 580, ∞", "grid-min": "",
+    "grid-max": "", "grid-n": "", "do-sweep": false, vary: "m0",
+    values: "0.1, 0.1468, 0.2154, 0.3162, 0.4642, 0.6813, 1, 1.468, 2.154, 3.162, 4.642, 6.813, 10",
+  };
+  const presets = {
+    fig2: {
+      note: "Fig. 2: the gap PDF at g̃ave = 0.98 for k̃2 = 5 by the paper's iteration, one curve per Vmax (tol 0.1 so that each Vmax is shown as computed, not refined).",
+      k2: "5", "k2-inf": false, method: "paper", tol: "0.1", vmax: "0.1, 0.05, 0.025, 0.0025",
+      "do-traction": false, "do-pdf": true, "pdf-k2": "5", "grid-min": "0.6", "grid-max": "1.6", "grid-n": "500",
+    },
+    fig3: {
+      note: "Fig. 3: gap PDFs at g̃ave = 0.98 as the spectrum is cut at k̃2 = 5, 20, 110, 580 and ∞ (C = 1/(4π), k̃1 = 1, D = 2.5).",
+      "do-traction": false, "do-pdf": true, "grid-min": "0.5", "grid-max": "1.8", "grid-n": "600",
+    },
+    fig4: {
+      note: "Fig. 4: the modified force law for C = 1/(4π) (m̃0 = 0.5), k̃1 = 1, k̃2 = ∞, D = 2.5; expect g̃eq ≈ 2.6028, σ̄max/σ0 ≈ 0.10126, Δγeff/Δγ ≈ 0.2015.",
+    },
+    fig4printed: {
+      note: "Fig. 4 with C = 1/π as printed in (17) (m̃0 = 2): g̃eq ≈ 5.68, outside the paper's axes — the reason the presets use C/4.",
+      level: "0.318310", "g-min": "4.5", "g-max": "12",
+    },
+    fig5a: {
+      note: "Fig. 5: Δγeff and σ̄max against m̃0 for D = 2.05, k̃1 = 0.5, k̃2 = ∞.",
+      exp: "2.05", "level-kind": "m0", level: "1", k1: "0.5", "do-traction": false, "do-sweep": true, tol: "1e-4",
+    },
+    fig5b: {
+      note: "Fig. 5: Δγeff and σ̄max against m̃0 for D = 2.5, k̃1 = 0.5, k̃2 = ∞.",
+      exp: "2.5", "level-kind": "m0", level: "1", k1: "0.5", "do-traction": false, "do-sweep": true, tol: "1e-4",
+    },
+    fig6: {
+      note: "Fig. 6: the statistical curve for the numerical model's surface (D = 2.2, k̃1 = 1, k̃2 = 8, m̃0 = 0.218), and the sweep over the three m̃0 of the figure.",
+      exp: "2.2", "level-kind": "m0", level: "0.218", k2: "8", "k2-inf": false, "g-min": "1", "g-max": "4",
+      "do-sweep": true, values: "0.1, 0.218, 0.3",
+    },
+  };
+
+  function setForm(values) {
+    for (const [id, v] of Object.entries(values)) {
+      if (id === "note") continue;
+      if (id === "kind") {
+        document.querySelector(`input[name="kind"][value="${v}"]`).checked = true;
+        continue;
+      }
+      const e = $(id);
+      if (e.type === "checkbox") e.checked = v;
+      else e.value = v;
+    }
+    syncVisibility();
+  }
+
+  function applyPreset(name) {
+    const p = presets[name];
+    setForm({ ...defaults, ...p });
+    $("preset-note").textContent = p.note;
+    run();
+  }
+
+  /* ---- visibility of optional parts ---- */
+
+  function syncVisibility() {
+    const table = document.querySelector('input[name="kind"]:checked').value === "table";
+    $("power-fields").hidden = table;
+    $("table-fields").hidden = !table;
+    $("k2").disabled = $("k2-inf").checked;
+    $("vmax-field").hidden = $("method").value !== "paper";
+    $("mc-field").hidden = $("method").value !== "montecarlo";
+    $("material-fields").hidden = !$("use-material").checked;
+    const pair = $("modulus-kind").value === "pair";
+    $("pair-fields").hidden = !pair;
+    $("estar-field").hidden = pair;
+  }
+
+  /* ---- simulation jobs: shown only when the server offers them ---- */
+
+  async function probeJobs() {
+    try {
+      const r = await fetch("/openapi.json");
+      const doc = await r.json();
+      const has = Object.keys(doc.paths || {}).some((p) => p.startsWith("/v1/simulations"));
+      if (has && window.LJJobs) window.LJJobs.init(doc);
+    } catch (e) {
+      /* no OpenAPI document: no jobs form */
+    }
+  }
+
+  /* ---- wiring ---- */
+
+  function init() {
+    collectClaims();
+    for (const n of panelNames) resetPanel(n);
+    addExports();
+    $("form").addEventListener("submit", (ev) => {
+      ev.preventDefault();
+      $("preset-note").textContent = "";
+      run();
+    });
+    for (const b of document.querySelectorAll("[data-preset]")) {
+      b.addEventListener("click", () => applyPreset(b.dataset.preset));
+    }
+    $("cancel").addEventListener("click", () => abort && abort.abort());
+    for (const id of ["k2-inf", "method", "use-material", "modulus-kind"]) $(id).addEventListener("change", syncVisibility);
+    for (const r of document.querySelectorAll('input[name="kind"]')) r.addEventListener("change", syncVisibility);
+    $("table-file").addEventListener("change", async () => {
+      const f = $("table-file").files[0];
+      if (f) $("table").value = await f.text();
+    });
+    for (const i of document.querySelectorAll("input, select, textarea")) {
+      i.addEventListener("input", () => {
+        i.classList.remove("invalid");
+        i.removeAttribute("aria-invalid");
+        const s = errorSpan(i.id);
+        if (s) s.textContent = "";
+      });
+    }
+    syncVisibility();
+    try {
+      showPsd(common(), null);
+    } catch (e) {
+      /* the picture waits for a usable form */
+    }
+    probeJobs();
+  }
+
+  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor };
+  init();
+})();

@@ -1,0 +1,232 @@
+/* plots.js -- the page's charts: thin wrappers around uPlot (web/vendor/uPlot.iife.min.js).
+ *
+ * Each chart is described by a "figure": {title, xLabel, yLabel, xLog, yLog, series:[{name, x[],
+ * y[], err[]?, color, dash?, fill?, points?}], marks:[…], xRange?, yClamp?, yZero?}. draw(el, fig) joins the
+ * series on one x axis (uPlot.join), draws them, adds the marks (vertical lines and labelled
+ * points, drawn on the canvas so that they appear in the PNG too) and keeps the chart as wide as
+ * its box. The legend under each chart is uPlot's live legend: hovering reads out every series at
+ * the cursor. toPNG(el) renders title + chart + legend into one PNG blob.
+ */
+"use strict";
+
+const LJPlots = (() => {
+  const charts = new WeakMap(); /* element -> {u, fig, ro} */
+  const HEIGHT = 300;
+
+  /* Short, exact enough numbers for readouts: 5 significant digits, exponent when far from 1. */
+  function fmt(v, digits = 5) {
+    if (v === null || v === undefined || !Number.isFinite(v)) return "—";
+    const a = Math.abs(v);
+    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return v.toExponential(digits - 1);
+    return String(Number(v.toPrecision(digits)));
+  }
+
+  function errFmt(v) {
+    if (v === null || v === undefined || !Number.isFinite(v)) return "—";
+    return v.toExponential(1);
+  }
+
+  /* Canvas marks: {type:"vline", x, label, color, dash} or {type:"point", x, y, label, color}. */
+  function drawMarks(u, marks) {
+    const ctx = u.ctx;
+    const dpr = devicePixelRatio || 1;
+    const { left, top, width, height } = u.bbox;
+    ctx.save();
+    ctx.font = `${12 * dpr}px system-ui, sans-serif`;
+    ctx.textBaseline = "top";
+    ctx.textAlign = "left"; /* uPlot leaves its axis alignment behind */
+    for (const m of marks) {
+      const px = u.valToPos(m.x, "x", true);
+      if (!Number.isFinite(px) || px < left - 1 || px > left + width + 1) continue;
+      ctx.strokeStyle = ctx.fillStyle = m.color || "#333";
+      if (m.type === "vline") {
+        ctx.lineWidth = 1.5 * dpr;
+        ctx.setLineDash((m.dash || [5, 4]).map((d) => d * dpr));
+        ctx.beginPath();
+        ctx.moveTo(px, top);
+        ctx.lineTo(px, top + height);
+        ctx.stroke();
+        ctx.setLineDash([]);
+        if (m.label) {
+          const w = ctx.measureText(m.label).width;
+          const tx = px + 4 * dpr + w > left + width ? px - 4 * dpr - w : px + 4 * dpr;
+          ctx.fillText(m.label, tx, top + (m.row || 0) * 16 * dpr + 4 * dpr);
+        }
+      } else if (m.type === "point") {
+        const py = u.valToPos(m.y, "y", true);
+        if (!Number.isFinite(py)) continue;
+        ctx.beginPath();
+        ctx.arc(px, py, 5 * dpr, 0, 2 * Math.PI);
+        ctx.lineWidth = 2 * dpr;
+        ctx.stroke();
+        if (m.label) {
+          const w = ctx.measureText(m.label).width;
+          const tx = px + 8 * dpr + w > left + width ? px - 8 * dpr - w : px + 8 * dpr;
+          ctx.fillText(m.label, tx, py - 18 * dpr);
+        }
+      }
+    }
+    ctx.restore();
+  }
+
+  /* The y range: data range with margins, optionally clamped (fig.yClamp = [lo, hi]). */
+  function yRange(fig) {
+    return (u, lo, hi) => {
+      if (fig.yLog) {
+        return [Math.pow(10, Math.floor(Math.log10(lo))), Math.pow(10, Math.ceil(Math.log10(hi)))];
+      }
+      if (fig.yClamp) {
+        lo = Math.max(lo, fig.yClamp[0]);
+        hi = Math.min(hi, fig.yClamp[1]);
+      }
+      if (fig.yZero) lo = Math.min(lo, 0);
+      const pad = (hi - lo) * 0.06 || 1;
+      return [lo - (fig.yZero && lo === 0 ? 0 : pad), hi + pad];
+    };
+  }
+
+  /* Log axes: ticks and grid at powers of ten only (every second or third one on long ranges). */
+  function decades(u, axis, lo, hi) {
+    const a = Math.floor(Math.log10(lo) + 1e-9);
+    const b = Math.ceil(Math.log10(hi) - 1e-9);
+    const step = Math.max(1, Math.ceil((b - a) / 8));
+    const out = [];
+    for (let e = a; e <= b; e += step) {
+      const v = Math.pow(10, e);
+      if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) out.push(v);
+    }
+    return out;
+  }
+
+  function tickLabels(log) {
+    return (u, splits) =>
+      splits.map((v) => {
+        if (v === null) return "";
+        if (log) {
+          const e = Math.round(Math.log10(v));
+          return e >= -2 && e <= 3 ? String(Number(Math.pow(10, e).toPrecision(1))) : `1e${e}`;
+        }
+        return fmt(v, 4);
+      });
+  }
+
+  function axis(label, log, extra) {
+    const a = { label, labelSize: 18, stroke: "#333", grid: { stroke: "#eee" }, values: tickLabels(log) };
+    if (log) a.splits = decades;
+    return Object.assign(a, extra);
+  }
+
+  function options(fig, width) {
+    const series = [
+      { label: fig.xName || fig.xLabel, value: (u, v) => fmt(v) },
+    ];
+    for (const s of fig.series) {
+      const o = {
+        label: s.name,
+        stroke: s.color,
+        width: s.width || 2,
+        spanGaps: !s.fill,
+        points: { show: !!s.points, size: 6, fill: s.color },
+        value: (u, v) => fmt(v),
+      };
+      if (s.dash) o.dash = s.dash;
+      if (s.fill) {
+        o.fill = s.fill;
+        o.fillTo = 0;
+      }
+      series.push(o);
+    }
+    return {
+      width,
+      height: HEIGHT,
+      series,
+      scales: {
+        x: fig.xRange
+          ? { time: false, distr: fig.xLog ? 3 : 1, log: 10, range: () => fig.xRange }
+          : { time: false, distr: fig.xLog ? 3 : 1, log: 10 },
+        y: { distr: fig.yLog ? 3 : 1, log: 10, range: yRange(fig) },
+      },
+      axes: [axis(fig.xLabel, fig.xLog, {}), axis(fig.yLabel, fig.yLog, { size: 64 })],
+      legend: { live: true },
+      cursor: { drag: { x: true, y: false } },
+      hooks: { draw: [(u) => drawMarks(u, fig.marks || [])] },
+    };
+  }
+
+  /* Draw fig into el, replacing what was there. */
+  function draw(el, fig) {
+    clear(el);
+    const tables = fig.series.map((s) => [s.x, s.y]);
+    const data = uPlot.join(tables);
+    const width = Math.max(300, el.clientWidth || 600);
+    const u = new uPlot(options(fig, width), data, el);
+    const ro = new ResizeObserver(() => {
+      const w = Math.max(300, el.clientWidth);
+      if (Math.abs(w - u.width) > 2) u.setSize({ width: w, height: HEIGHT });
+    });
+    ro.observe(el);
+    charts.set(el, { u, fig, ro });
+    return u;
+  }
+
+  function clear(el) {
+    const c = charts.get(el);
+    if (c) {
+      c.ro.disconnect();
+      c.u.destroy();
+      charts.delete(el);
+    }
+    el.replaceChildren();
+  }
+
+  function figure(el) {
+    const c = charts.get(el);
+    return c ? c.fig : null;
+  }
+
+  /* PNG of the chart in el: white background, title, the plot canvas, a legend line. */
+  function toPNG(el) {
+    const c = charts.get(el);
+    if (!c) return Promise.resolve(null);
+    const src = c.u.ctx.canvas;
+    const dpr = devicePixelRatio || 1;
+    const head = 28 * dpr;
+    const foot = 24 * dpr;
+    const out = document.createElement("canvas");
+    out.width = src.width;
+    out.height = src.height + head + foot;
+    const ctx = out.getContext("2d");
+    ctx.fillStyle = "#fff";
+    ctx.fillRect(0, 0, out.width, out.height);
+    ctx.fillStyle = "#111";
+    ctx.font = `bold ${14 * dpr}px system-ui, sans-serif`;
+    ctx.textBaseline = "middle";
+    ctx.fillText(c.fig.title || "", 8 * dpr, head / 2);
+    ctx.drawImage(src, 0, head);
+    ctx.font = `${12 * dpr}px system-ui, sans-serif`;
+    let x = 8 * dpr;
+    const y = head + src.height + foot / 2;
+    for (const s of c.fig.series) {
+      ctx.fillStyle = s.color || "#333";
+      ctx.fillRect(x, y - 2 * dpr, 16 * dpr, 4 * dpr);
+      x += 20 * dpr;
+      ctx.fillStyle = "#111";
+      ctx.fillText(s.name, x, y);
+      x += ctx.measureText(s.name).width + 14 * dpr;
+    }
+    return new Promise((resolve) => out.toBlob(resolve, "image/png"));
+  }
+
+  /* Whether the plot canvas of el has any non-transparent pixel inside the plotting area. */
+  function inked(el) {
+    const c = charts.get(el);
+    if (!c) return 0;
+    const { left, top, width, height } = c.u.bbox;
+    const img = c.u.ctx.getImageData(left, top, Math.max(1, width), Math.max(1, height)).data;
+    let n = 0;
+    for (let i = 3; i < img.length; i += 4) if (img[i] !== 0) n++;
+    return n;
+  }
+
+  return { draw, clear, figure, toPNG, inked, fmt, errFmt };
+})();
