@@ -282,6 +282,19 @@ static int check_D(ljgap_verr *e, const char *ptr, double D, const double *h)
     return 0;
 }
 
+/* x within the range the solvers accept (ljgap.h), else a problem at ptr naming it: the core
+ * would refuse it too, but could only point at "/psd". what names x in the message. */
+static int in_core_range(ljgap_verr *e, const char *ptr, const char *what, double x, double lo,
+                         double hi)
+{
+    if (!(x >= lo && x <= hi)) {
+        ljgap_verr_add(e, ptr, "%s = %g is outside [%g, %g], the range this service computes", what,
+                       x, lo, hi);
+        return 0;
+    }
+    return 1;
+}
+
 /* Uniform range {"min","max","n"} at it (pointer base): 0 < min < max, n integer 2..nmax. */
 static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double nmax, double out[3])
 {
@@ -335,6 +348,12 @@ static void parse_level(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
             s->level_val = ljgap_units_len_to_dimless(mat, s->level_val);
         }
     }
+    /* level_val > 0: it was read (or num_pos has already said why not) */
+    if (found && s->level_val > 0 && s->level == LJGAP_LEVEL_M0)
+        in_core_range(e, "/psd/m0", "m0 (in units of ε²)", s->level_val, 0, LJGAP_M0_MAX);
+    else if (found && s->level_val > 0 && s->level == LJGAP_LEVEL_HRMS)
+        in_core_range(e, "/psd/h_rms", "h_rms (in units of ε)", s->level_val, 0,
+                      sqrt(LJGAP_M0_MAX));
     if (!found)
         ljgap_verr_add(e, "/psd",
                        "no level field: give exactly one of C, m0 (= 2π∫kP dk), "
@@ -360,6 +379,7 @@ static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
     }
     k1 = required(e, psd, "/psd", "k1", "the lowest wavenumber of the PSD");
     k1_ok = k1 && check_k1(e, k1, "/psd/k1", chi, &s->k1);
+    if (k1_ok) k1_ok = in_core_range(e, "/psd/k1", "k1 (in units of 1/χ)", s->k1, 0, LJGAP_K_MAX);
     if (!k1_ok) s->k1 = NAN; /* so later checks against k1 do not pile up */
     k2 = member(psd, "k2");
     s->k2 = INFINITY;
@@ -370,6 +390,8 @@ static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
             ljgap_verr_add(e, "/psd/k2", "k2 = %g must be greater than k1 = %g", s->k2,
                            s->k1 / chi);
         s->k2 *= chi;
+        if (isfinite(s->k2))
+            in_core_range(e, "/psd/k2", "k2 (in units of 1/χ; null for ∞)", s->k2, 0, LJGAP_K_MAX);
     }
     parse_level(e, psd, mat, s);
 }
@@ -629,7 +651,10 @@ static void parse_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits 
     double r[3];
     if (!g) return;
     if (cJSON_IsObject(g)) {
-        if (!parse_range(e, g, "/g_ave", (double)lim->max_points, r)) return;
+        if (!parse_range(e, g, "/g_ave", (double)lim->max_points, r) ||
+            !in_core_range(e, "/g_ave/min", "g_ave", r[0], LJGAP_G_MIN, LJGAP_G_MAX) ||
+            !in_core_range(e, "/g_ave/max", "g_ave", r[1], LJGAP_G_MIN, LJGAP_G_MAX))
+            return;
         if (!(rq->x = malloc((size_t)r[2] * sizeof *rq->x))) {
             e->oom = 1;
             return;
@@ -645,7 +670,9 @@ static void parse_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits 
         cJSON_ArrayForEach(it, g)
         {
             snprintf(ptr, sizeof ptr, "/g_ave/%zu", i);
-            num_pos(e, it, ptr, &rq->x[i++]);
+            if (num_pos(e, it, ptr, &rq->x[i]))
+                in_core_range(e, ptr, "g_ave", rq->x[i], LJGAP_G_MIN, LJGAP_G_MAX);
+            i++;
         }
     } else {
         ljgap_verr_add(e, "/g_ave", "must be {\"min\",\"max\",\"n\"} or an array of mean gaps");
@@ -661,7 +688,8 @@ static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
     char ptr[PTR_LEN];
     int infinite = 0, k1_known = 0;
     double k1 = 0;
-    if (g) num_pos(e, g, "/g_ave", &rq->g_ave);
+    if (g && num_pos(e, g, "/g_ave", &rq->g_ave))
+        in_core_range(e, "/g_ave", "g_ave", rq->g_ave, LJGAP_G_MIN, LJGAP_G_MAX);
     if (grid && !cJSON_IsObject(grid))
         ljgap_verr_add(e, "/grid", "must be an object {\"min\",\"max\",\"n\"}");
     else if (grid)
@@ -726,7 +754,10 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
                 ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x,
                                rq->psd.k2 / chi);
         } else {
-            num_pos(e, it, ptr, x);
+            if (num_pos(e, it, ptr, x) && rq->vary == LJGAP_VARY_M0)
+                in_core_range(e, ptr, "m0 (in units of ε²)",
+                              rq->si_psd ? ljgap_units_var_to_dimless(&rq->mat, *x) : *x, 0,
+                              LJGAP_M0_MAX);
         }
     }
 }
