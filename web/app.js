@@ -166,8 +166,8 @@
   /* ---- problems beside their fields ---- */
 
   const claims = []; /* [pointer prefix, element id, panel or null] */
-  function collectClaims() {
-    for (const e of document.querySelectorAll("[data-ptr]")) {
+  function collectClaims(root = document) {
+    for (const e of root.querySelectorAll("[data-ptr]")) {
       /* data-panel: the pointer means this field only in that panel's request (/g_ave) */
       for (const p of e.dataset.ptr.split(/\s+/)) claims.push([p, e.id, e.dataset.panel || null]);
     }
@@ -263,7 +263,7 @@
     });
 
   /* POST the exact text to /v1/endpoint; retries 503 after Retry-After. -> {status, json} */
-  async function post(endpoint, text, signal) {
+  async function post(endpoint, text, signal = new AbortController().signal) {
     for (let attempt = 0; ; attempt++) {
       const r = await fetch(`/v1/${endpoint}`, {
         method: "POST",
@@ -802,17 +802,35 @@
     $("estar-field").hidden = pair;
   }
 
-  /* ---- simulation jobs: shown only when the server offers them ---- */
+  /* ---- simulation jobs (jobs.js): shown only when the server offers them ---- */
+
+  /* A chart and its exports for a panel that jobs.js fills. */
+  function showSeries(name, series, figOpts, answers) {
+    const p = panels[name];
+    p.series = series;
+    p.xName = figOpts.xName || "x";
+    p.answers = answers;
+    LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, ...figOpts });
+  }
 
   async function probeJobs() {
+    let doc = null;
     try {
-      const r = await fetch("/openapi.json");
-      const doc = await r.json();
-      const has = Object.keys(doc.paths || {}).some((p) => p.startsWith("/v1/simulations"));
-      if (has && window.LJJobs) window.LJJobs.init(doc);
+      doc = await (await fetch("/openapi.json")).json();
     } catch (e) {
-      /* no OpenAPI document: no jobs form */
+      return; /* no OpenAPI document: no jobs form */
     }
+    const op = (doc.paths || {})["/v1/simulations"];
+    if (!op || !op.post || /planned/i.test(op.post.summary || "") || typeof LJJobs === "undefined") return;
+    LJJobs.init({
+      common, post, el, list, val, fmt, errFmt, clearErrors, showSeries,
+      placeProblem,
+      claim: collectClaims,
+      panel: (name, req) => {
+        if (req.endpoint === "simulations") resetPanel(name);
+        panels[name].requests.push(req);
+      },
+    });
   }
 
   /* ---- wiring ---- */

@@ -214,6 +214,29 @@ test("exports: CSV, JSON, PNG of the plot and copy as curl with the exact reques
   assert.deepEqual(answer.summary, json.answers[0].summary);
 });
 
+test("table PSD uploaded as CSV: traction drawn, table and tail in the PSD plot; bad rows refused", async () => {
+  await page.click('[data-preset="fig4"]');
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
+  await page.check('input[name="kind"][value="table"]');
+  // the power law of Fig. 4 sampled: P = C k^(2D-8) with the tail exponent 2D - 8 = -3
+  const C = 0.0795775;
+  const rows = [1, 2, 4, 8, 16].map((k) => `${k},${C * Math.pow(k, -3)}`);
+  await page.setInputFiles("#table-file", { name: "psd.csv", mimeType: "text/csv", buffer: Buffer.from(`k,P\n${rows.join("\n")}\n`) });
+  await page.waitForFunction(() => document.getElementById("table").value.startsWith("k,P"));
+  await page.fill("#tail", "-3");
+  assert.match(await runAndWait("#compute"), /^Done: 1 request/);
+  assert.ok((await inked("plot-traction")) > 2000);
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-psd")));
+  assert.deepEqual(fig.series.map((s) => s.name), ["P̃S table", "tail ∝ k^-3"]);
+  // the same spectrum as Fig. 4, so the same answer (log-log interpolation of a power law is exact)
+  const geq = Number((await page.$$eval("#readout-traction table tr td:nth-child(2)", (t) => t.map((e) => e.textContent)))[0]);
+  assert.ok(Math.abs(geq - 2.6028) < 2e-4, `g_eq ${geq}`);
+  await page.fill("#table", "k,P\n1,0.08\n2 oops\n");
+  await runAndWait("#compute");
+  assert.match(await page.textContent('.err[data-for="table"]'), /line 3/);
+  await page.check('input[name="kind"][value="power"]');
+});
+
 test("material and sphere radius: SI values and the contact panel", async () => {
   await page.click('[data-preset="fig4"]');
   await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
@@ -226,6 +249,33 @@ test("material and sphere radius: SI values and the contact panel", async () => 
   assert.match(await page.textContent("#readout-traction"), /J\/m²/);
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-contact.png"), fullPage: true });
+});
+
+test("simulation jobs: a form with a progress bar when the server offers them, else none", async () => {
+  const api = await (await fetch(`${origin}/openapi.json`)).json();
+  const op = (api.paths || {})["/v1/simulations"];
+  const offered = !!(op && op.post && !/planned/i.test(op.post.summary || ""));
+  assert.equal(await page.isVisible("#jobs-card"), offered);
+  if (!offered) return; // the server has no jobs: the page must not offer the form (checked above)
+  await page.click('[data-preset="fig6"]');
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
+  await page.fill("#sim-n", "32");
+  await page.fill("#sim-real", "2");
+  await page.fill("#sim-g", "1.5, 2, 3");
+  await page.click("#sim-start");
+  await page.waitForFunction(() => /done in|failed|cancelled/.test(document.getElementById("sim-state").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#sim-state"), /done in/);
+  assert.equal(await page.evaluate(() => document.getElementById("sim-progress").value), 1);
+  assert.ok((await inked("plot-jobs")) > 500, "jobs canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-jobs")));
+  assert.deepEqual(fig.series.map((x) => x.name), ["σ̄/σ0 numerical model", "σ̄/σ0 statistical theory"]);
+  assert.deepEqual(fig.series[0].x, [1.5, 2, 3]);
+  // a bad grid answers 422 at once, beside the field
+  await page.fill("#sim-n", "33");
+  await page.click("#sim-start");
+  await page.waitForFunction(() => document.getElementById("sim-state").dataset.status === "refused");
+  consoleErrors.splice(0, consoleErrors.length, ...consoleErrors.filter((m) => !/status of 422/.test(m)));
+  assert.match(await page.textContent('.err[data-for="sim-n"]'), /even/);
 });
 
 test("all panels for the screenshot; no console error, no CSP violation, nothing left the server", async () => {
