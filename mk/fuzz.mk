@@ -36,10 +36,12 @@ $(FUZZ_DIR)/obj/%.o: %.c
 	  $(FUZZ_SAN) -fsanitize=fuzzer-no-link -c $< -o $@
 
 $(FUZZ_BIN): $(FUZZ_DIR)/obj/tests/fuzz/fuzz_handler.o $(FUZZ_OBJ)
+	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer $^ $(LDLIBS) -o $@
 
 $(FUZZ_REPLAY): $(BUILD)/tests/fuzz/replay.o $(BUILD)/tests/fuzz/fuzz_handler.o \
                 $(BUILD)/libljgap_server.a $(BUILD)/libljgap.a
+	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
