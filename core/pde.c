@@ -127,19 +127,29 @@ static double dk_dzeta(const zeta_ctx *z, double k)
     return 1.0 / d;
 }
 
-/* The k in [ka,kb] with zeta(k) = target: safeguarded Newton in x = ln(k - k0). */
+/* The step coefficient per unit zeta at k: π k P(k) dk/dzeta (a = that times f^2). */
+static double rate_of(const zeta_ctx *z, double k)
+{
+    return M_PI * k * ljgap_psd_eval(z->psd, k) * dk_dzeta(z, k);
+}
+
+/* The k in [ka,kb] with zeta(k) = target: safeguarded Newton in x = ln(k - k0), started at
+ * ka (the march asks for the next node just above the previous one, and zeta is concave in
+ * x for the usual spectra, so Newton from the left end converges in a few steps). */
 static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
 {
     double xa = log(ka - z->k0), xb = log(kb - z->k0);
-    double x = 0.5 * (xa + xb);
+    double x = xa;
     for (int it = 0; it < 100; it++) {
         double k = z->k0 + exp(x);
         double r = zeta_of(z, k) - target;
+        if (r == 0) return k; /* (else the bracket test below would bisect away from it) */
         if (r > 0)
             xb = x;
         else
             xa = x;
-        double dzdx = dk_dzeta(z, k) > 0 ? (k - z->k0) / dk_dzeta(z, k) : 1.0;
+        double dkz = dk_dzeta(z, k);
+        double dzdx = dkz > 0 ? (k - z->k0) / dkz : 1.0;
         double xn = x - r / dzdx;
         if (!(xn > xa && xn < xb)) xn = 0.5 * (xa + xb);
         if (fabs(xn - x) < 1e-14 * (1.0 + fabs(x)) || xb - xa < 1e-14 * (1.0 + fabs(x)))
@@ -196,7 +206,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     M->s = malloc(cap * sizeof *M->s);
     if (!M->s) return LJGAP_ENOMEM;
     size_t m = 0;
-    double kprev = psd->k1, zprev = z1;
+    double kprev = psd->k1, zprev = z1, rprev = rate_of(&z, psd->k1);
     long jn = 0;  /* regular nodes zeta(k1) + j dz passed so far */
     int nreg = 0; /* steps made */
     for (size_t c = 0; c < nc; c++) {
@@ -211,25 +221,17 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
                 kb = zeta_inv(&z, zn, kprev, kc);
             while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz)
                 jn++;
-            double h = zn - zprev;
+            double h = zn - zprev, rb = rate_of(&z, kb);
             if (nreg++ < 2) {
                 /* Rannacher start: each of the first two steps as two backward-Euler halves */
                 double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
-                double sa =
-                    0.5 * h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev);
-                double sm = 0.5 * h * M_PI * km * ljgap_psd_eval(psd, km) * dk_dzeta(&z, km);
-                double sb = 0.5 * h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb);
-                M->s[m++] = (pde_step){kprev, km, sa, sm, 1.0, -1};
-                M->s[m++] = (pde_step){km, kb, sm, sb, 1.0, -1};
+                double sm = 0.5 * h * rate_of(&z, km);
+                M->s[m++] = (pde_step){kprev, km, 0.5 * h * rprev, sm, 1.0, -1};
+                M->s[m++] = (pde_step){km, kb, sm, 0.5 * h * rb, 1.0, -1};
             } else {
-                M->s[m++] =
-                    (pde_step){kprev,
-                               kb,
-                               h * M_PI * kprev * ljgap_psd_eval(psd, kprev) * dk_dzeta(&z, kprev),
-                               h * M_PI * kb * ljgap_psd_eval(psd, kb) * dk_dzeta(&z, kb),
-                               0.5,
-                               -1};
+                M->s[m++] = (pde_step){kprev, kb, h * rprev, h * rb, 0.5, -1};
             }
+            rprev = rb;
             kprev = kb;
             zprev = zn;
             if (zn >= zc) break;
@@ -1023,4 +1025,38 @@ int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, i
     st = R.sum_ok ? LJGAP_OK : LJGAP_EFAIL;
     curve_result_free(&R);
     return st;
+}
+
+int ljgap_pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double g_lo, double g_hi,
+                           int level, ljgap_pdf *out)
+{
+    if (!(g_lo > 0 && g_lo < g_ave && g_ave < g_hi) || level < 0 || level > MAX_LEVEL)
+        return LJGAP_EINVAL;
+    ljgap_opts o;
+    ljgap_opts_default(&o);
+    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    double cut = fmin(k2, psd->k2);
+    pdf_level P = {0};
+    memset(out, 0, sizeof *out);
+    int st = pdf_level_run(&C, g_ave, g_lo, g_hi, &cut, 1, level, &P);
+    if (st) return st;
+    const pde_grid *G = &P.G;
+    out->k2 = k2;
+    out->n = G->n;
+    out->g = malloc(G->n * sizeof(double));
+    out->phi = malloc(G->n * sizeof(double));
+    if (!out->g || !out->phi) {
+        ljgap_pdf_release(out, 1);
+        pdf_level_free(&P, 1);
+        return LJGAP_ENOMEM;
+    }
+    for (size_t i = 0; i < G->n; i++) {
+        out->g[i] = G->g[i];
+        out->phi[i] = P.p[0][i] / G->wt[i];
+        out->mass += P.p[0][i];
+        out->mean += P.p[0][i] * G->g[i];
+    }
+    out->sigma = (ljgap_est){snap_sigma(G, P.p[0]), 0.0};
+    pdf_level_free(&P, 1);
+    return LJGAP_OK;
 }
