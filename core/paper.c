@@ -361,6 +361,46 @@ end:
     return st;
 }
 
+/* The grid of the traction driver before its lower end is moved (file comment). */
+static void trac_setup_make(trac_setup *ts, const ljgap_psd *psd, const double *g_ave, size_t n,
+                            int want_sum)
+{
+    const double sm = sqrt(psd->m0);
+    double gmin = INFINITY, gmax = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        gmin = fmin(gmin, g_ave[i]);
+        gmax = fmax(gmax, g_ave[i]);
+    }
+    ts->want_sum = want_sum;
+    ts->g_c0 = PAPER_NCURVE_G0;
+    ts->g_end = gmax;
+    if (want_sum) ts->g_end = fmax(ts->g_end, fmax(8.0, 12.0 * sm + 1.0));
+    ts->g_chk = want_sum ? fmin(gmin, ts->g_c0) : gmin;
+    ts->g_lo = 0.5 * fmin(1.0, ts->g_chk);
+    ts->g_hi = fmax(8.0, ts->g_end + 10.0 * sm);
+}
+
+int ljgap__paper_summary_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax,
+                            ljgap_summary *sum)
+{
+    if (!(vmax > 0) || !isfinite(vmax)) return LJGAP_EINVAL;
+    trac_setup ts;
+    trac_setup_make(&ts, psd, NULL, 0, 1);
+    double v[NSUM], impact = 0.0;
+    long work = 0;
+    int st = trac_level(psd, o, ljgap_now() + o->max_seconds, vmax, &ts, NULL, 0, v, &impact, &work,
+                        NULL);
+    if (st) return st;
+    memset(sum, 0, sizeof *sum);
+    sum->g_eq.value = v[0];
+    sum->sigma_max.value = v[1];
+    sum->g_at_max.value = v[2];
+    sum->dgamma_eff.value = v[3];
+    sum->m0 = psd->m0;
+    sum->k0 = ljgap_k0();
+    return LJGAP_OK;
+}
+
 static int converged(const double *v, const double *err, size_t n, double tol)
 {
     for (size_t i = 0; i < n; i++)
@@ -430,21 +470,9 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
 {
     if (!(o->vmax > 0) || !isfinite(o->vmax) || (n && !sigma)) return LJGAP_EINVAL;
     const double deadline = ljgap_now() + o->max_seconds;
-    const double sm = sqrt(psd->m0);
     trac_setup ts;
-    ts.want_sum = sum != NULL;
-    double gmin = INFINITY, gmax = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        gmin = fmin(gmin, g_ave[i]);
-        gmax = fmax(gmax, g_ave[i]);
-    }
-    if (!ts.want_sum && n == 0) return LJGAP_OK;
-    ts.g_c0 = PAPER_NCURVE_G0;
-    ts.g_end = gmax;
-    if (ts.want_sum) ts.g_end = fmax(ts.g_end, fmax(8.0, 12.0 * sm + 1.0));
-    ts.g_chk = ts.want_sum ? fmin(gmin, ts.g_c0) : gmin;
-    ts.g_lo = 0.5 * fmin(1.0, ts.g_chk);
-    ts.g_hi = fmax(8.0, ts.g_end + 10.0 * sm);
+    if (!sum && n == 0) return LJGAP_OK;
+    trac_setup_make(&ts, psd, g_ave, n, sum != NULL);
 
     size_t nv = n + (ts.want_sum ? NSUM : 0);
     double *v0 = calloc(nv + 1, sizeof *v0), *v1 = calloc(nv + 1, sizeof *v1);
@@ -604,6 +632,58 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* The density p/h of the masses p on level A, at its nodes or on grid {min,max,n} (linear
+ * interpolation), with mass and mean, into out (g, phi, n, mass, mean). */
+static int pdf_out(const pdf_level *A, const double *p, const double *grid, ljgap_pdf *out)
+{
+    size_t m = grid ? (size_t)grid[2] : A->n;
+    double g0 = grid ? grid[0] : A->g_lo;
+    double dg = grid ? (grid[1] - grid[0]) / (double)(m - 1) : A->h;
+    out->n = m;
+    out->g = malloc(m * sizeof *out->g);
+    out->phi = malloc(m * sizeof *out->phi);
+    if (!out->g || !out->phi) return LJGAP_ENOMEM;
+    double mass = 0.0, mean = 0.0;
+    for (size_t j = 0; j < m; j++) {
+        double g = g0 + (double)j * dg;
+        out->g[j] = g;
+        out->phi[j] = grid ? grid_interp(p, A->n, A->g_lo, A->h, g) / A->h : p[j] / A->h;
+        mass += out->phi[j] * dg;
+    }
+    for (size_t j = 0; j < A->n; j++)
+        mean += p[j] * (A->g_lo + (double)j * A->h);
+    out->mass = mass;
+    out->mean = mean;
+    return LJGAP_OK;
+}
+
+/* The grid ends of the PDF driver before its lower end is moved (file comment). */
+static void pdf_ends(const ljgap_psd *psd, double g_ave, double *g_lo, double *g_hi)
+{
+    *g_lo = 0.5 * fmin(1.0, g_ave);
+    *g_hi = fmax(8.0, g_ave + 10.0 * sqrt(psd->m0));
+}
+
+int ljgap__paper_pdf_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax, double g_ave,
+                        double k2, const double *grid, ljgap_pdf *out)
+{
+    if (!(vmax > 0) || !isfinite(vmax)) return LJGAP_EINVAL;
+    double g_lo, g_hi, leak = 0.0, ks = fmin(k2, psd->k2);
+    long work = 0;
+    pdf_level A = {0};
+    memset(out, 0, sizeof *out);
+    pdf_ends(psd, g_ave, &g_lo, &g_hi);
+    int st = pdf_run(psd, o, ljgap_now() + o->max_seconds, vmax, g_lo, g_hi, g_ave, &ks, 1, &A,
+                     &leak, &work);
+    if (st) return st;
+    out->k2 = k2;
+    out->sigma = (ljgap_est){pdf_sigma(&A, A.p), 0.0};
+    st = pdf_out(&A, A.p, grid, out);
+    pdf_level_free(&A);
+    if (st) ljgap_pdf_release(out, 1);
+    return st;
+}
+
 int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                     size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
@@ -620,7 +700,8 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
         ks[i] = fmin(k2[i], psd->k2);
     qsort(ks, nk2, sizeof *ks, cmp_double);
 
-    double g_lo = 0.5 * fmin(1.0, g_ave), g_hi = fmax(8.0, g_ave + 10.0 * sqrt(psd->m0));
+    double g_lo, g_hi;
+    pdf_ends(psd, g_ave, &g_lo, &g_hi);
     double vmax = o->vmax, impact = 0.0;
     long work = 0, last = 0;
     for (;;) { /* place the lower grid end as for the traction */
@@ -680,29 +761,9 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
         size_t s = 0;
         while (s + 1 < nk2 && ks[s] != kq)
             s++;
-        const double *p = A.p + s * A.n;
-        size_t m = grid ? (size_t)grid[2] : A.n;
-        double g0 = grid ? grid[0] : A.g_lo;
-        double dg = grid ? (grid[1] - grid[0]) / (double)(m - 1) : A.h;
         out[i].k2 = k2[i];
-        out[i].n = m;
-        out[i].g = malloc(m * sizeof *out[i].g);
-        out[i].phi = malloc(m * sizeof *out[i].phi);
-        if (!out[i].g || !out[i].phi) {
-            st = LJGAP_ENOMEM;
-            goto end;
-        }
-        double mass = 0.0, mean = 0.0;
-        for (size_t j = 0; j < m; j++) {
-            double g = g0 + (double)j * dg;
-            out[i].g[j] = g;
-            out[i].phi[j] = grid ? grid_interp(p, A.n, A.g_lo, A.h, g) / A.h : p[j] / A.h;
-            mass += out[i].phi[j] * dg;
-        }
-        for (size_t j = 0; j < A.n; j++)
-            mean += p[j] * (A.g_lo + (double)j * A.h);
-        out[i].mass = mass;
-        out[i].mean = mean;
+        st = pdf_out(&A, A.p + s * A.n, grid, &out[i]);
+        if (st) goto end;
         out[i].sigma = (ljgap_est){sig[s], serr[s]};
         out[i].phi_err = perr[s];
     }

@@ -50,6 +50,17 @@ int ljgap__paper_forward(ljgap__paper_ws *ws, const ljgap_psd *psd, double *p, s
 int ljgap__paper_backward(ljgap__paper_ws *ws, const ljgap_psd *psd, double *u, double *leak,
                           const ljgap_opts *o, double deadline);
 
+/* One level at a fixed Vmax (grid spacing by the rule below, the drivers' initial grid ends),
+ * without refinement or error estimate: for measuring error against run time. o gives the
+ * time cap and cancel flag only (o->max_seconds: LJGAP_ECAP).
+ * ljgap__paper_summary_at: the adhesion summary (errors zero) of the traction curve.
+ * ljgap__paper_pdf_at: the PDF at g_ave for the PSD truncated at k2, at the nodes or on grid
+ * {min,max,n}; sigma.err and phi_err are zero. Release out with ljgap_pdf_release. */
+int ljgap__paper_summary_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax,
+                            ljgap_summary *sum);
+int ljgap__paper_pdf_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax, double g_ave,
+                        double k2, const double *grid, ljgap_pdf *out);
+
 /* Grid spacing rule: min(0.005, sqrt(vmax)/10). */
 double ljgap__paper_h(double vmax);
 
