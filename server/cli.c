@@ -2,6 +2,10 @@
  *
  *   ljgap NAME [FILE]     read the request for endpoint NAME from FILE (or stdin), print the
  *                         answer body (one line) on stdout
+ *   ljgap simulations [FILE]   run one numerical-model job in the foreground (the body of
+ *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
+ *                         a progress bar when it is a terminal (nothing otherwise, so logs and
+ *                         pipes stay clean); Ctrl-C cancels the run (a 503 problem, exit 1)
  *
  * The same contract as POST /v1/NAME (shared/docs/api.md): exit status 0 for a 2xx answer,
  * 1 for a problem (whose body is still printed on stdout), 2 when the command line is wrong
@@ -12,9 +16,11 @@
 
 #include <errno.h>
 #include <gsl/gsl_errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static void usage(FILE *f)
 {
@@ -22,6 +28,9 @@ static void usage(FILE *f)
                "       ljgap --help | --version\n"
                "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact) from FILE\n"
                "or standard input and prints the JSON answer on standard output.\n"
+               "NAME simulations runs one numerical-model job in the foreground and prints its\n"
+               "result; a progress bar goes to standard error when it is a terminal, and Ctrl-C\n"
+               "cancels the run.\n"
                "Exit status: 0 for a 2xx answer, 1 for a problem answer, 2 for a usage or\n"
                "read error. See shared/docs/api.md for the fields.\n");
 }
@@ -48,6 +57,53 @@ static char *read_all(FILE *f, size_t *len)
     buf[n] = '\0';
     *len = n;
     return buf;
+}
+
+/* ---- simulations in the foreground ---- */
+
+static volatile sig_atomic_t interrupted; /* Ctrl-C: the run's cancel flag */
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    interrupted = 1;
+}
+
+#define BAR_WIDTH 40
+
+/* The progress bar on a terminal: redrawn in place when the whole percent changes. */
+typedef struct {
+    int last; /* percent drawn last, -1 before the first */
+} bar;
+
+static void bar_draw(void *ctx, double fraction)
+{
+    static const char full[BAR_WIDTH + 1] = "########################################";
+    bar *b = ctx;
+    int pct = (int)(100 * (fraction > 0 ? (fraction < 1 ? fraction : 1) : 0));
+    if (pct == b->last) return;
+    b->last = pct;
+    fprintf(stderr, "\r[%-*.*s] %3d%%", BAR_WIDTH, pct * BAR_WIDTH / 100, full, pct);
+    fflush(stderr);
+}
+
+/* Validates and runs one simulation, the answer into *rep (as ljgap_handle would). */
+static void run_simulation(const char *body, size_t len, ljgap_reply *rep)
+{
+    bar b = {-1};
+    int tty = isatty(STDERR_FILENO);
+    ljgap_sim_control ctl = {0, &interrupted, tty ? bar_draw : NULL, &b};
+    struct sigaction sa, old;
+    ljgap_sim_request *rq = ljgap_sim_request_parse(body, len, rep);
+    if (!rq) return;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old);
+    ljgap_sim_request_run(rq, &ctl, rep);
+    sigaction(SIGINT, &old, NULL);
+    if (b.last >= 0) fputc('\n', stderr);
+    ljgap_sim_request_free(rq);
 }
 
 int main(int argc, char **argv)
@@ -78,7 +134,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "ljgap: cannot read the request: %s\n", strerror(errno));
         goto end;
     }
-    ljgap_handle(argv[1], body, len, &rep);
+    if (strcmp(argv[1], "simulations") == 0)
+        run_simulation(body, len, &rep);
+    else
+        ljgap_handle(argv[1], body, len, &rep);
     if (fwrite(rep.body, 1, rep.len, stdout) != rep.len || putchar('\n') == EOF ||
         fflush(stdout) != 0) {
         fprintf(stderr, "ljgap: cannot write the answer: %s\n", strerror(errno));

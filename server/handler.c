@@ -36,6 +36,7 @@
  * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
  */
 #include "handler.h"
+#include "ljgap_sim.h"
 #include "request.h"
 
 #include <math.h>
@@ -660,28 +661,15 @@ static cJSON *parse_body(const char *body, size_t len, size_t *where)
     return root;
 }
 
-void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+/* Parses body and validates it as a request to ep into j->rq. Returns 1 when it is valid;
+ * else 0 with the problem (400, 422 or 500) in *out. j->rq is left for ljgap_request_free. */
+static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out)
 {
-    double t0 = ljgap_now();
-    const route *r = route_find(endpoint);
     cJSON *root = NULL;
     ljgap_verr ve = {0};
-    job j;
     char detail[DETAIL_LEN];
     size_t where = 0;
-    int st;
-    memset(&j, 0, sizeof j);
-    memset(out, 0, sizeof *out);
-    if (!r) {
-        /* the name may be any bytes: quote only its first whole UTF-8 characters */
-        snprintf(detail, sizeof detail,
-                 "no endpoint \"%.*s\": the endpoints are adhesion, "
-                 "traction, pdf, sweep and contact",
-                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
-                 endpoint ? endpoint : "");
-        reply_problem(out, &P_NOT_FOUND, detail, NULL);
-        goto end;
-    }
+    int ok = 0;
     if (!(root = parse_body(body, len, &where))) {
         snprintf(detail, sizeof detail,
                  "the body is not one valid JSON value in UTF-8 (error at byte "
@@ -694,7 +682,7 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
         reply_oom(out);
         goto end;
     }
-    if (ljgap_request_parse(r->ep, root, &limits, &j.rq, &ve) || ve.oom) {
+    if (ljgap_request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
         if (ve.oom) {
             reply_oom(out);
             goto end;
@@ -711,6 +699,33 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
         ve.errors = NULL; /* reply_problem took it */
         goto end;
     }
+    ok = 1;
+end:
+    cJSON_Delete(root);
+    cJSON_Delete(ve.errors);
+    return ok;
+}
+
+void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+{
+    double t0 = ljgap_now();
+    const route *r = route_find(endpoint);
+    job j;
+    char detail[DETAIL_LEN];
+    int st;
+    memset(&j, 0, sizeof j);
+    memset(out, 0, sizeof *out);
+    if (!r) {
+        /* the name may be any bytes: quote only its first whole UTF-8 characters */
+        snprintf(detail, sizeof detail,
+                 "no endpoint \"%.*s\": the endpoints are adhesion, "
+                 "traction, pdf, sweep and contact",
+                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
+                 endpoint ? endpoint : "");
+        reply_problem(out, &P_NOT_FOUND, detail, NULL);
+        goto end;
+    }
+    if (!validate(r->ep, body, len, &j, out)) goto end;
     j.deadline = t0 + limits.max_seconds;
     if (!(j.ans = cJSON_CreateObject())) {
         reply_oom(out);
@@ -724,8 +739,123 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
     else
         reply_json(out, 200, CT_JSON, j.ans);
 end:
-    cJSON_Delete(root);
-    cJSON_Delete(ve.errors);
     cJSON_Delete(j.ans);
     ljgap_request_free(&j.rq);
+}
+
+/* ---- simulations (ljgap_sim.h) ---- */
+
+struct ljgap_sim_request {
+    job j;         /* the validated request (j.rq) and, while it runs, the answer */
+    ljgap_psd psd; /* built from j.rq.psd at parse time */
+};
+
+ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_reply *out)
+{
+    ljgap_sim_request *sr = calloc(1, sizeof *sr);
+    ljgap_verr ve = {0};
+    int st;
+    memset(out, 0, sizeof *out);
+    if (!sr) {
+        reply_oom(out);
+        return NULL;
+    }
+    if (!validate(LJGAP_EP_SIMULATION, body, len, &sr->j, out)) goto fail;
+    st = ljgap_psd_from_spec(&sr->psd, &sr->j.rq.psd);
+    if (st == LJGAP_OK && sr->psd.m0 > 0 && sr->psd.m0 <= LJGAP_M0_MAX) return sr;
+    if (st == LJGAP_ENOMEM || !(ve.errors = cJSON_CreateArray())) {
+        reply_oom(out);
+        goto fail;
+    }
+    ljgap_verr_add(&ve, "/psd", "the PSD's variance m0 = %g is outside (0, %g]",
+                   st == LJGAP_OK ? sr->psd.m0 : NAN, LJGAP_M0_MAX);
+    if (ve.oom)
+        reply_oom(out);
+    else
+        reply_problem(out, &P_VALIDATION, "1 problem in the request: see errors", ve.errors);
+    ve.errors = NULL;
+fail:
+    cJSON_Delete(ve.errors);
+    ljgap_sim_request_free(sr);
+    return NULL;
+}
+
+/* The result object of a run (api.md "simulations"). */
+static void put_sim_result(job *j, const ljgap_sim_result *r, double t0)
+{
+    cJSON *jump, *err;
+    size_t n = r->n_gap;
+    put_nums(j, j->ans, "g_ave", r->g_ave, n, sizeof *r->g_ave, "g_ave");
+    put_nums(j, j->ans, "sigma", r->sigma, n, sizeof *r->sigma, "sigma");
+    put_nums(j, j->ans, "sigma_std", r->sigma_std, n, sizeof *r->sigma_std, "sigma_std");
+    put_nums(j, j->ans, "sigma_out", r->sigma_out, n, sizeof *r->sigma_out, "sigma_out");
+    put_nums(j, j->ans, "residual", r->residual, n, sizeof *r->residual, "residual");
+    jump = put(j, j->ans, "jump", cJSON_CreateArray());
+    for (size_t i = 0; jump && i < n; i++)
+        put(j, jump, NULL, cJSON_CreateBool(r->jump[i]));
+    put_nums(j, j->ans, "m0_realized", r->m0_realized, (size_t)r->realizations,
+             sizeof *r->m0_realized, "m0_realized");
+    put_num(j, j->ans, "m0", r->m0_target, "m0", -1);
+    put_num(j, j->ans, "m0_grid", r->m0_grid, "m0_grid", -1);
+    put_num(j, j->ans, "L", r->L, "L", -1);
+    put(j, j->ans, "n", cJSON_CreateNumber(r->n));
+    put(j, j->ans, "realizations", cJSON_CreateNumber(r->realizations));
+    put(j, j->ans, "seed", cJSON_CreateNumber((double)j->rq.sim.seed));
+    put(j, j->ans, "tol", cJSON_CreateNumber(j->rq.sim.tol));
+    put(j, j->ans, "elapsed_ms", cJSON_CreateNumber((ljgap_now() - t0) * 1e3));
+    err = put(j, j->ans, "error", cJSON_CreateObject());
+    put_nums(j, err, "sigma", r->sigma_err, n, sizeof *r->sigma_err, "error.sigma");
+}
+
+void ljgap_sim_request_run(ljgap_sim_request *sr, const ljgap_sim_control *ctl, ljgap_reply *out)
+{
+    double t0 = ljgap_now();
+    job *j = &sr->j;
+    ljgap_sim_opts o = j->rq.sim;
+    ljgap_sim_result res;
+    char head[DETAIL_LEN + 200], detail[DETAIL_LEN];
+    int st;
+    memset(out, 0, sizeof *out);
+    memset(&res, 0, sizeof res);
+    if (ctl) {
+        if (ctl->max_seconds > 0) o.max_seconds = ctl->max_seconds;
+        o.cancel = ctl->cancel;
+        o.progress = ctl->progress;
+        o.progress_ctx = ctl->progress_ctx;
+    }
+    st = ljgap_sim_run(&sr->psd, &o, j->rq.x, j->rq.nx, &res, &j->rq.warn);
+    if (!st && !(j->ans = cJSON_CreateObject())) st = LJGAP_ENOMEM;
+    if (!st) {
+        put_sim_result(j, &res, t0);
+        put_meta(j, t0);
+        if (j->oom) st = LJGAP_ENOMEM;
+    }
+    if (!st) {
+        reply_json(out, 200, CT_JSON, j->ans);
+    } else if (st == LJGAP_ECAP) {
+        snprintf(head, sizeof head,
+                 "the simulation needs more than the cap of %g s of wall time for one run; "
+                 "ask for a smaller n, fewer realizations or fewer mean gaps",
+                 o.max_seconds);
+        join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        reply_problem(out, &P_CAP, detail, NULL);
+    } else if (st == LJGAP_ECANCEL) {
+        reply_problem(out, &P_UNAVAILABLE,
+                      "the simulation was cancelled before it finished (DELETE, Ctrl-C, or the "
+                      "server shutting down)",
+                      NULL);
+    } else {
+        reply_status(out, st, j);
+    }
+    cJSON_Delete(j->ans);
+    j->ans = NULL;
+    ljgap_sim_result_free(&res);
+}
+
+void ljgap_sim_request_free(ljgap_sim_request *sr)
+{
+    if (!sr) return;
+    ljgap_psd_free(&sr->psd);
+    ljgap_request_free(&sr->j.rq);
+    free(sr);
 }

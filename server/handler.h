@@ -39,4 +39,28 @@ void ljgap_reply_free(ljgap_reply *r);
 /* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
 int ljgap_handler_has(const char *endpoint);
 
+/* ---- simulations: the numerical model (ljgap_sim.h) as a job ----
+ * Not an endpoint of ljgap_handle: a run takes minutes, so the daemon queues it (jobs.h) and
+ * the CLI runs it in the foreground. Both go through these calls, so the validation, the
+ * problems and the answer are the same (api.md "simulations"). Parse and free are pure and
+ * thread-safe like ljgap_handle; run uses only its own request. */
+typedef struct ljgap_sim_request ljgap_sim_request;
+
+/* How a run is driven: everything may be zero. */
+typedef struct {
+    double max_seconds;         /* wall-time cap of the run; <= 0: the core's default (600 s) */
+    const volatile int *cancel; /* nonzero stops the run (a 503 "unavailable" problem) */
+    void (*progress)(void *ctx, double fraction); /* fraction done, 0..1, now and then */
+    void *progress_ctx;                           /* first argument of progress */
+} ljgap_sim_control;
+
+/* Validates a POST /v1/simulations body. Returns the request, to be run once and freed, or
+ * NULL with *out filled with the problem (400 malformed JSON, 422 with a pointer per bad
+ * field, 500 out of memory). */
+ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_reply *out);
+/* Runs it (ljgap_sim_run) and fills *out: 200 with the result object (g_ave, sigma,
+ * sigma_std, m0_realized, elapsed_ms, error, ... and meta), or a problem. */
+void ljgap_sim_request_run(ljgap_sim_request *rq, const ljgap_sim_control *ctl, ljgap_reply *out);
+void ljgap_sim_request_free(ljgap_sim_request *rq); /* NULL is fine */
+
 #endif

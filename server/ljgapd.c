@@ -25,6 +25,13 @@
  *   - logging: one line per request on stderr (method, path, status, milliseconds, request id),
  *     written when libmicrohttpd reports the request complete. X-Request-Id is echoed when the
  *     client sends a sane one, otherwise made up, and is returned on every answer.
+ *   - simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and
+ *     queues a numerical-model run in the job store (jobs.h: --job-workers threads, a queue of
+ *     --job-queue, 503 with Retry-After when full); 202 gives the job's id and its Location.
+ *     GET /v1/simulations/ID polls it (status, progress, then result or problem), DELETE
+ *     cancels it (200 once it has ended, 202 while it is still stopping). Job workers do not
+ *     take compute slots: they are threads of their own, so size --compute-slots and
+ *     --job-workers together to the cores.
  *   - shutdown: SIGINT/SIGTERM are taken by sigwait() in main. The daemon stops accepting
  *     (MHD_quiesce_daemon), lets in-flight requests finish for a grace period, then raises the
  *     handler's cancel flag so long computations return early, and stops the daemon, all within
@@ -35,6 +42,7 @@
  */
 #include "handler.h"
 #include "http_cache.h"
+#include "jobs.h"
 #include "ljgap.h"
 
 #include <arpa/inet.h>
@@ -65,24 +73,29 @@ extern const size_t ljgapd_openapi_len;
 /* ---- configuration ---- */
 
 typedef struct {
-    unsigned port;        /* TCP port; 0 lets the kernel pick one (default 8080) */
-    const char *bind;     /* numeric IPv4 or IPv6 address to listen on (default 127.0.0.1) */
-    const char *web;      /* directory of static files, NULL serves none (default NULL) */
-    unsigned threads;     /* connection limit = connection threads (default max(64, slots+16)) */
-    unsigned slots;       /* concurrent computations (default: online cores) */
-    unsigned timeout_s;   /* idle connection timeout in seconds (default 30) */
-    size_t max_body;      /* largest accepted request body in bytes (default 1 MiB) */
-    size_t cache_entries; /* cache bound in entries (default 1024) */
-    size_t cache_bytes;   /* cache bound in bytes (default 64 MiB) */
-    unsigned retry_after; /* Retry-After seconds on 503 (default 1) */
-    double grace_s;       /* shutdown: seconds in-flight work may run before cancel (default 7) */
-    double stop_s;        /* shutdown: seconds after the signal at which we stop (default 9.5) */
+    unsigned port;          /* TCP port; 0 lets the kernel pick one (default 8080) */
+    const char *bind;       /* numeric IPv4 or IPv6 address to listen on (default 127.0.0.1) */
+    const char *web;        /* directory of static files, NULL serves none (default NULL) */
+    unsigned threads;       /* connection limit = connection threads (default max(64, slots+16)) */
+    unsigned slots;         /* concurrent computations (default: online cores) */
+    unsigned timeout_s;     /* idle connection timeout in seconds (default 30) */
+    size_t max_body;        /* largest accepted request body in bytes (default 1 MiB) */
+    size_t cache_entries;   /* cache bound in entries (default 1024) */
+    size_t cache_bytes;     /* cache bound in bytes (default 64 MiB) */
+    unsigned retry_after;   /* Retry-After seconds on 503 (default 1) */
+    double grace_s;         /* shutdown: seconds in-flight work may run before cancel (default 7) */
+    double stop_s;          /* shutdown: seconds after the signal at which we stop (default 9.5) */
+    ljgap_jobs_config jobs; /* simulation jobs: workers, queue, finished jobs kept (jobs.h) */
+    unsigned job_seconds;   /* wall-time cap of one simulation (default 600) */
+    unsigned job_retry;     /* Retry-After seconds when the job queue is full (default 10) */
+    double cancel_wait_s;   /* DELETE waits this long for a running job to stop (default 2) */
 } ljgapd_config;
 
 /* ---- server state shared by all connection threads ---- */
 
 static ljgapd_config cfg;
 static http_cache *cache;        /* answers of earlier identical requests */
+static ljgap_jobs *jobs;         /* simulation jobs */
 static int web_fd = -1;          /* open directory cfg.web, or -1 */
 static atomic_uint busy_slots;   /* computations running now */
 static atomic_uint inflight;     /* requests begun and not yet reported complete */
@@ -152,13 +165,22 @@ static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
     return ret;
 }
 
-/* Answer status with a copy of body (JSON or problem+json, as ctype says). */
-static enum MHD_Result respond_json(struct MHD_Connection *c, request *r, int status,
-                                    const char *ctype, const char *body, size_t len)
+/* Answer status with a copy of body (JSON or problem+json, as ctype says) and, when header is
+ * not NULL, one extra header (Location). */
+static enum MHD_Result respond_json_hdr(struct MHD_Connection *c, request *r, int status,
+                                        const char *ctype, const char *body, size_t len,
+                                        const char *header, const char *value)
 {
     struct MHD_Response *resp =
         MHD_create_response_from_buffer(len, (void *)body, MHD_RESPMEM_MUST_COPY);
+    if (resp && header) MHD_add_response_header(resp, header, value);
     return respond(c, r, status, resp, ctype);
+}
+
+static enum MHD_Result respond_json(struct MHD_Connection *c, request *r, int status,
+                                    const char *ctype, const char *body, size_t len)
+{
+    return respond_json_hdr(c, r, status, ctype, body, len, NULL, NULL);
 }
 
 /* Problem types of the answers written here (the handler writes its own, same base URI;
@@ -334,6 +356,98 @@ static int compute_exists(const char *rest)
     return ljgap_handler_has(rest);
 }
 
+/* ---- simulation jobs ---- */
+
+#define SIM_PATH "/v1/simulations"
+
+static void sim_job_run(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out)
+{
+    ljgap_sim_control sc = {(double)cfg.job_seconds, ctl->cancel, ctl->progress, ctl->ctx};
+    ljgap_sim_request_run(arg, &sc, out);
+}
+
+static void sim_job_free(void *arg)
+{
+    ljgap_sim_request_free(arg);
+}
+
+/* Answers a ljgap_reply and frees it. */
+static enum MHD_Result respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep)
+{
+    enum MHD_Result ret = respond_json(c, r, rep->status, rep->content_type, rep->body, rep->len);
+    ljgap_reply_free(rep);
+    return ret;
+}
+
+/* POST /v1/simulations: validate, queue, 202 with the job's status and its Location. */
+static enum MHD_Result route_sim_submit(struct MHD_Connection *c, request *r)
+{
+    ljgap_reply rep = {0};
+    ljgap_sim_request *sr = ljgap_sim_request_parse(r->body ? r->body : "", r->len, &rep);
+    char id[LJGAP_JOB_ID_LEN + 1], where[sizeof SIM_PATH + LJGAP_JOB_ID_LEN + 1], detail[120];
+    char retry[16], *status = NULL;
+    enum MHD_Result ret;
+
+    if (!sr) return respond_reply(c, r, &rep);
+    switch (ljgap_jobs_submit(jobs, sim_job_run, sr, sim_job_free, id)) {
+    case LJGAP_JOBS_OK:
+        break;
+    case LJGAP_JOBS_FULL:
+        snprintf(retry, sizeof retry, "%u", cfg.job_retry);
+        snprintf(detail, sizeof detail,
+                 "the simulation queue is full (%u jobs waiting); retry after the given seconds",
+                 cfg.jobs.queue_cap);
+        return respond_problem(c, r, MHD_HTTP_SERVICE_UNAVAILABLE, detail,
+                               MHD_HTTP_HEADER_RETRY_AFTER, retry);
+    case LJGAP_JOBS_STOPPING:
+        return respond_problem(c, r, MHD_HTTP_SERVICE_UNAVAILABLE,
+                               "the server is shutting down and takes no new jobs", NULL, NULL);
+    default:
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    }
+    /* a job just queued is not evicted (only finished ones are, and keep_done >= 1) */
+    if (ljgap_jobs_status(jobs, id, &status) != LJGAP_JOBS_OK)
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    snprintf(where, sizeof where, SIM_PATH "/%s", id);
+    ret = respond_json_hdr(c, r, MHD_HTTP_ACCEPTED, "application/json", status, strlen(status),
+                           MHD_HTTP_HEADER_LOCATION, where);
+    free(status);
+    return ret;
+}
+
+/* Any one path segment may name a job; unknown ones are answered 404 by route_sim_job. */
+static int sim_id_exists(const char *rest)
+{
+    return rest[0] && !strchr(rest, '/');
+}
+
+/* GET (or HEAD) /v1/simulations/ID: its status; DELETE: cancel it. */
+static enum MHD_Result route_sim_job(struct MHD_Connection *c, request *r)
+{
+    const char *id = r->url + strlen(SIM_PATH "/");
+    char *status = NULL, detail[200];
+    int final = 1, st;
+    enum MHD_Result ret;
+
+    if (strcmp(r->method, "DELETE") == 0)
+        st = ljgap_jobs_cancel(jobs, id, cfg.cancel_wait_s, &status, &final);
+    else
+        st = ljgap_jobs_status(jobs, id, &status);
+    if (st == LJGAP_JOBS_UNKNOWN) {
+        snprintf(detail, sizeof detail,
+                 "no simulation job with this id: it never existed, or it finished more than "
+                 "%.0f s ago or before the last %u finished jobs",
+                 cfg.jobs.keep_seconds, cfg.jobs.keep_done);
+        return respond_problem(c, r, MHD_HTTP_NOT_FOUND, detail, NULL, NULL);
+    }
+    if (st != LJGAP_JOBS_OK)
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    ret = respond_json(c, r, final ? MHD_HTTP_OK : MHD_HTTP_ACCEPTED, "application/json", status,
+                       strlen(status));
+    free(status);
+    return ret;
+}
+
 /* The Content-Type of an allowlisted static file name (relative to web/), or NULL.
  * Allowed: index.html, and NAME.{js,css,png,svg,json} at the top or in vendor/, where NAME is
  * letters, digits, '.', '_' and '-' not starting with '.'. So nothing can climb out of web/. */
@@ -403,6 +517,8 @@ static const struct route routes[] = {
     {"/healthz", NULL, "GET, HEAD", 0, route_healthz},
     {"/version", NULL, "GET, HEAD", 0, route_version},
     {"/openapi.json", NULL, "GET, HEAD", 0, route_openapi},
+    {SIM_PATH, NULL, "POST", 1, route_sim_submit},
+    {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job},
     {"/v1/", compute_exists, "POST", 1, route_compute},
     {"/", static_exists, "GET, HEAD", 0, route_static},
     {NULL, NULL, NULL, 0, route_not_found},
@@ -586,21 +702,26 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
 
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: ljgapd [--port N] [--bind ADDR] [--web DIR] [--threads N] "
-            "[--compute-slots N]\n"
-            "Serves the ljgap calculations over HTTP (see /openapi.json).\n"
-            "  --port N           TCP port; 0 picks a free one (default 8080)\n"
-            "  --bind ADDR        numeric IPv4/IPv6 address to listen on (default 127.0.0.1)\n"
-            "  --web DIR          serve the page and its assets from DIR (default: none)\n"
-            "  --threads N        most simultaneous connections; each connection has its own\n"
-            "                     thread, so this also bounds the threads (default max(64,\n"
-            "                     slots+16); must exceed --compute-slots so /healthz and static\n"
-            "                     files always find a thread)\n"
-            "  --compute-slots N  most computations at once; more get 503 + Retry-After\n"
-            "                     (default: number of cores)\n"
-            "The first line on stdout is 'listening on http://HOST:PORT/'; one log line per\n"
-            "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n");
+    fprintf(
+        f, "usage: ljgapd [--port N] [--bind ADDR] [--web DIR] [--threads N] "
+           "[--compute-slots N]\n"
+           "Serves the ljgap calculations over HTTP (see /openapi.json).\n"
+           "  --port N           TCP port; 0 picks a free one (default 8080)\n"
+           "  --bind ADDR        numeric IPv4/IPv6 address to listen on (default 127.0.0.1)\n"
+           "  --web DIR          serve the page and its assets from DIR (default: none)\n"
+           "  --threads N        most simultaneous connections; each connection has its own\n"
+           "                     thread, so this also bounds the threads (default max(64,\n"
+           "                     slots+16); must exceed --compute-slots so /healthz and static\n"
+           "                     files always find a thread)\n"
+           "  --compute-slots N  most computations at once; more get 503 + Retry-After\n"
+           "                     (default: number of cores)\n"
+           "  --job-workers N    simulation jobs running at once, each on its own thread\n"
+           "                     (default 1)\n"
+           "  --job-queue N      simulation jobs waiting; more get 503 + Retry-After (default 8)\n"
+           "  --job-keep N       finished jobs kept for polling, for at most an hour (default 64)\n"
+           "  --job-seconds N    wall-time cap of one simulation (default 600)\n"
+           "The first line on stdout is 'listening on http://HOST:PORT/'; one log line per\n"
+           "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n");
 }
 
 static int parse_uint(const char *s, unsigned lo, unsigned hi, unsigned *out)
@@ -622,6 +743,10 @@ static int parse_args(int argc, char **argv)
         {"web", required_argument, NULL, 'w'},
         {"threads", required_argument, NULL, 't'},
         {"compute-slots", required_argument, NULL, 's'},
+        {"job-workers", required_argument, NULL, 'W'},
+        {"job-queue", required_argument, NULL, 'Q'},
+        {"job-keep", required_argument, NULL, 'K'},
+        {"job-seconds", required_argument, NULL, 'S'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -639,6 +764,10 @@ static int parse_args(int argc, char **argv)
     cfg.retry_after = 1;
     cfg.grace_s = 7.0;
     cfg.stop_s = 9.5;
+    ljgap_jobs_config_default(&cfg.jobs);
+    cfg.job_seconds = 600;
+    cfg.job_retry = 10;
+    cfg.cancel_wait_s = 2.0;
     while ((o = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         int bad = 0;
         switch (o) {
@@ -657,6 +786,18 @@ static int parse_args(int argc, char **argv)
         case 's':
             bad = parse_uint(optarg, 1, 10000, &cfg.slots);
             break;
+        case 'W':
+            bad = parse_uint(optarg, 1, 64, &cfg.jobs.workers);
+            break;
+        case 'Q':
+            bad = parse_uint(optarg, 1, 10000, &cfg.jobs.queue_cap);
+            break;
+        case 'K':
+            bad = parse_uint(optarg, 1, 100000, &cfg.jobs.keep_done);
+            break;
+        case 'S':
+            bad = parse_uint(optarg, 1, 86400, &cfg.job_seconds);
+            break;
         case 'h':
             usage(stdout);
             exit(0);
@@ -665,11 +806,10 @@ static int parse_args(int argc, char **argv)
             return -1;
         }
         if (bad) {
-            fprintf(stderr, "ljgapd: bad value '%s' for --%s\n", optarg,
-                    opts[o == 'p'   ? 0
-                         : o == 't' ? 3
-                                    : 4]
-                        .name);
+            const struct option *opt = opts;
+            while (opt->val != o)
+                opt++;
+            fprintf(stderr, "ljgapd: bad value '%s' for --%s\n", optarg, opt->name);
             return -1;
         }
     }
@@ -766,7 +906,8 @@ int main(int argc, char **argv)
         id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
 
     cache = http_cache_alloc(cfg.cache_entries, cfg.cache_bytes);
-    if (!cache) {
+    jobs = ljgap_jobs_alloc(&cfg.jobs);
+    if (!cache || !jobs) {
         fprintf(stderr, "ljgapd: out of memory\n");
         goto end;
     }
@@ -781,8 +922,8 @@ int main(int argc, char **argv)
     if (!d) goto end;
     printf("listening on http://%s:%u/\n", host, cfg.port);
     fflush(stdout);
-    fprintf(stderr, "ljgapd %s: %u compute slots, %u connections, web %s\n", LJGAP_VERSION,
-            cfg.slots, cfg.threads, cfg.web ? cfg.web : "(none)");
+    fprintf(stderr, "ljgapd %s: %u compute slots, %u connections, %u job workers, web %s\n",
+            LJGAP_VERSION, cfg.slots, cfg.threads, cfg.jobs.workers, cfg.web ? cfg.web : "(none)");
 
     while (sigwait(&sigs, &sig) != 0)
         ;
@@ -791,6 +932,7 @@ int main(int argc, char **argv)
     fprintf(stderr, "ljgapd: %s, stopping (%u requests in flight)\n", strsignal(sig),
             atomic_load(&inflight));
     lfd = MHD_quiesce_daemon(d);
+    ljgap_jobs_shutdown(jobs); /* background jobs have no client waiting: cancel them now */
     wait_inflight(&t_sig, cfg.grace_s);
     if (atomic_load(&inflight) > 0) {
         fprintf(stderr, "ljgapd: cancelling %u computations\n", atomic_load(&busy_slots));
@@ -803,12 +945,17 @@ int main(int argc, char **argv)
                 atomic_load(&inflight));
         _exit(0);
     }
+    if (!ljgap_jobs_wait_idle(jobs, cfg.stop_s - seconds_since(&t_sig))) {
+        fprintf(stderr, "ljgapd: a simulation ignored its cancel flag; exiting without it\n");
+        _exit(0);
+    }
     MHD_stop_daemon(d);
     if (lfd != MHD_INVALID_SOCKET) close(lfd);
     fprintf(stderr, "ljgapd: stopped after %.1f s\n", seconds_since(&t_sig));
     rc = 0;
 end:
     if (web_fd >= 0) close(web_fd);
+    ljgap_jobs_free(jobs);
     http_cache_free(cache);
     return rc;
 }

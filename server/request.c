@@ -47,6 +47,9 @@ static const char *const power_fields[] = {"kind", "D", "H", "k1", "k2", "C", "m
 static const char *const table_fields[] = {"kind", "k", "P", "tail", NULL};
 static const char *const tail_fields[] = {"exponent", NULL};
 static const char *const range_fields[] = {"min", "max", "n", NULL};
+/* A simulation takes the dimensionless psd and its own fields only (no method, material). */
+static const char *const sim_fields[] = {"psd",  "n",     "L",   "realizations",
+                                         "seed", "g_ave", "tol", NULL};
 
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
 {
@@ -762,11 +765,112 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
     }
 }
 
+/* The band [k1, k2] of a parsed psd into k (NAN where unknown or infinite); the numerical
+ * model needs a finite k2: a power law without one, or a table with a tail, is a problem. */
+static void sim_band(ljgap_verr *e, const ljgap_psd_spec *s, double k[2])
+{
+    k[0] = k[1] = NAN;
+    if (s->kind == LJGAP_PSD_POWER) {
+        k[0] = s->k1;
+        k[1] = s->k2;
+        if (isinf(s->k2))
+            ljgap_verr_add(e, "/psd/k2",
+                           "the numerical model needs a band-limited PSD: give a finite k2 "
+                           "(the grid carries wavenumbers up to πn/L)");
+    } else if (s->kind == LJGAP_PSD_TABLE && s->k && s->n > 1) {
+        k[0] = s->k[0];
+        k[1] = s->k[s->n - 1];
+        if (s->has_tail)
+            ljgap_verr_add(e, "/psd/tail",
+                           "the numerical model needs a band-limited PSD: drop the tail "
+                           "(the table then ends at its last k)");
+    }
+    if (!isfinite(k[0])) k[0] = NAN;
+    if (!isfinite(k[1])) k[1] = NAN;
+}
+
+/* The grid of a simulation: n even in [8, LJGAP_SIM_N_MAX], L in [2π/k1, 1e4·2π/k1] (0: 2π/k1),
+ * and the Nyquist wavenumber πn/L at or above k2 (the rules of ljgap_sim_run; a grid that
+ * misses k2 is reported at /n with the n that would do, or at /psd/k2 when none would). */
+static void parse_sim_grid(ljgap_verr *e, const cJSON *root, const double k[2], ljgap_sim_opts *o)
+{
+    const cJSON *it;
+    double x, Lmin = 2 * M_PI / k[0], L;
+    int ok = 1;
+    if ((it = member(root, "n"))) {
+        if (!num_int(e, it, "/n", 8, LJGAP_SIM_N_MAX, &x)) {
+            ok = 0;
+        } else if (fmod(x, 2) != 0) {
+            ljgap_verr_add(e, "/n", "n = %g must be even (the grid is n × n for the FFT)", x);
+            ok = 0;
+        } else {
+            o->n = (int)x;
+        }
+    }
+    if ((it = member(root, "L"))) {
+        if (!num_pos(e, it, "/L", &o->L)) {
+            ok = 0;
+        } else if (!isnan(Lmin) && !(o->L >= Lmin * (1 - 1e-12) && o->L <= 1e4 * Lmin)) {
+            ljgap_verr_add(e, "/L",
+                           "L = %g is outside [2π/k1, 1e4·2π/k1] = [%.6g, %.6g]: the square "
+                           "must carry the band's longest wave",
+                           o->L, Lmin, 1e4 * Lmin);
+            ok = 0;
+        }
+    }
+    if (!ok || isnan(Lmin) || isnan(k[1])) return;
+    L = o->L > 0 ? o->L : Lmin;
+    if (k[1] > M_PI * o->n / L * (1 + 1e-12)) {
+        double need = ceil(k[1] * L / M_PI);
+        need += fmod(need, 2);
+        if (need <= LJGAP_SIM_N_MAX)
+            ljgap_verr_add(e, "/n",
+                           "the grid does not resolve k2 = %g: its highest wavenumber is "
+                           "πn/L = %g (n = %d, L = %g); n >= %.0f would do",
+                           k[1], M_PI * o->n / L, o->n, L, need);
+        else
+            ljgap_verr_add(e, "/psd/k2",
+                           "no grid resolves k2 = %g with L = %g: that needs n >= %.0f, over "
+                           "the cap %d; lower k2 or take a smaller L",
+                           k[1], L, need, LJGAP_SIM_N_MAX);
+    }
+}
+
+/* A simulation (ljgap_sim.h): grid, realizations, seed, tol and the mean gaps, which are a
+ * list or a range as for traction, at most LJGAP_SIM_GAPS_MAX of them. */
+static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
+                             ljgap_request *rq)
+{
+    ljgap_sim_opts *o = &rq->sim;
+    ljgap_limits gaps = *lim;
+    const cJSON *it;
+    double x, k[2];
+    ljgap_sim_opts_default(o);
+    sim_band(e, &rq->psd, k);
+    parse_sim_grid(e, root, k, o);
+    if ((it = member(root, "realizations")) &&
+        num_int(e, it, "/realizations", 1, LJGAP_SIM_REALIZATIONS_MAX, &x))
+        o->realizations = (int)x;
+    if ((it = member(root, "seed")) && num_int(e, it, "/seed", 0, SEED_MAX, &x))
+        o->seed = (unsigned long)x;
+    if ((it = member(root, "tol")) && num(e, it, "/tol", &x)) {
+        if (x >= 1e-14 && x <= 1e-2)
+            o->tol = x;
+        else
+            ljgap_verr_add(e, "/tol",
+                           "tol = %g is outside [1e-14, 1e-2] (the rms residual of the force "
+                           "balance relative to σ0)",
+                           x);
+    }
+    if (gaps.max_points > LJGAP_SIM_GAPS_MAX) gaps.max_points = LJGAP_SIM_GAPS_MAX;
+    parse_traction(e, root, &gaps, rq);
+}
+
 int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq, ljgap_verr *e)
 {
-    static const char *const *const extra[] = {NULL, traction_fields, pdf_fields, sweep_fields,
-                                               contact_fields};
+    static const char *const *const extra[] = {NULL,         traction_fields, pdf_fields,
+                                               sweep_fields, contact_fields,  NULL};
     const cJSON *R;
     int si;
     memset(rq, 0, sizeof *rq);
@@ -777,6 +881,13 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     rq->psd.kind = (ljgap_psd_kind)-1;
     if (!cJSON_IsObject(root)) {
         ljgap_verr_add(e, "", "the request body must be a JSON object");
+        return e->n;
+    }
+    if (ep == LJGAP_EP_SIMULATION) {
+        rq->method = "numerical";
+        only_fields(e, root, "", sim_fields, NULL);
+        parse_psd(e, root, NULL, &rq->psd);
+        parse_simulation(e, root, lim, rq);
         return e->n;
     }
     only_fields(e, root, "", common_fields, extra[ep]);
@@ -790,6 +901,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     }
     switch (ep) {
     case LJGAP_EP_ADHESION:
+    case LJGAP_EP_SIMULATION: /* parsed above */
         break;
     case LJGAP_EP_TRACTION:
         parse_traction(e, root, lim, rq);

@@ -12,6 +12,7 @@
 
 #include "handler.h"
 #include "ljgap.h"
+#include "ljgap_sim.h"
 #include "ljgap_units.h"
 
 #include <cjson/cJSON.h>
@@ -22,7 +23,8 @@ typedef enum {
     LJGAP_EP_TRACTION,
     LJGAP_EP_PDF,
     LJGAP_EP_SWEEP,
-    LJGAP_EP_CONTACT
+    LJGAP_EP_CONTACT,
+    LJGAP_EP_SIMULATION /* a numerical-model job (ljgap_sim.h), not a synchronous endpoint */
 } ljgap_endpoint;
 
 /* Which PSD field a sweep varies. */
@@ -50,9 +52,9 @@ typedef struct {
     ljgap_opts opts;       /* method, tol, vmax, samples, seed (limits set by the handler) */
     const char *method;    /* contract name of opts.method (static string) */
     ljgap_psd_spec psd;    /* the psd object */
-    double *x;             /* owned: traction g_ave points, pdf k2 cut-offs (INFINITY for
-                            * null), or sweep values (as given: SI when si_psd; see
-                            * ljgap_request_sweep_spec) */
+    double *x;             /* owned: traction and simulation g_ave points, pdf k2 cut-offs
+                            * (INFINITY for null), or sweep values (as given: SI when si_psd;
+                            * see ljgap_request_sweep_spec) */
     size_t nx;             /* entries in x */
     double g_ave;          /* pdf: the mean gap */
     int has_grid;          /* pdf: grid given */
@@ -63,6 +65,8 @@ typedef struct {
     ljgap_material mat;    /* the material (SI), when has_material */
     int si_psd;            /* "units":"SI": the psd object was given in SI (now converted) */
     double R;              /* contact: sphere radius (m) */
+    ljgap_sim_opts sim;    /* simulation: n, L, realizations, seed, tol (the core's defaults
+                            * for what is not given); g_ave points in x */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
 } ljgap_request;
 

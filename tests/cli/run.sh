@@ -127,3 +127,31 @@ echo "{\"psd\":$psd,\"material\":{\"E_star\":1e9,\"dgamma\":-1,\"epsilon\":3e-10
 run adhesion
 check "negative dgamma is a 422 at /material/dgamma" jq_true \
     '.status == 422 and [.errors[].pointer] == ["/material/dgamma"]'
+
+# ---- simulations: one numerical-model job in the foreground ----
+sim='"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1},"n":32,"realizations":2'
+echo "{$sim,\"g_ave\":[2,3]}" >"$tmp/in"
+cp "$tmp/in" "$tmp/sim.json"
+run simulations
+check "simulations exits 0 with one line" eval 'rc_is 0 && one_line'
+check "simulations prints the result: sigma, error.sigma, m0_realized, meta" jq_true \
+    '(.sigma | length) == 2 and (.error.sigma | all(. >= 0)) and (.m0_realized | length) == 2
+     and .g_ave == [2,3] and .meta.method == "numerical" and .elapsed_ms >= 0'
+check "simulations: no progress bar when stderr is not a terminal" eval '[ ! -s "$tmp/err" ]'
+script -qec "$LJGAP simulations $tmp/sim.json >$tmp/tty.out" /dev/null >"$tmp/tty" 2>&1
+check "simulations: a progress bar up to 100% when stderr is a terminal" \
+    eval 'grep -q "100%" "$tmp/tty" && jq -e ".sigma | length == 2" "$tmp/tty.out" >/dev/null'
+echo "{$sim,\"n\":33,\"g_ave\":[2]}" >"$tmp/in"
+run simulations
+check "simulations: odd n is a 422 at /n, exit 1" eval 'rc_is 1 &&
+    jq_true ".status == 422 and [.errors[].pointer] == [\"/n\"]"'
+echo "{\"psd\":{\"kind\":\"power\",\"D\":2.2,\"k1\":1,\"k2\":8,\"m0\":0.1},\"n\":256,
+    \"realizations\":16,\"g_ave\":{\"min\":1.2,\"max\":4,\"n\":150}}" >"$tmp/long.json"
+"$LJGAP" simulations "$tmp/long.json" >"$tmp/out" 2>/dev/null &
+pid=$!
+sleep 0.5
+kill -INT "$pid"
+wait "$pid"
+echo $? >"$tmp/rc"
+check "simulations: SIGINT cancels the run: exit 1, a 503 problem" eval 'rc_is 1 &&
+    jq_true ".status == 503 and (.type | endswith(\"/unavailable\"))"'

@@ -12,19 +12,7 @@ WRAP=${WRAP:-}
 SLOW=1 # multiplier for time bounds
 [ -n "$WRAP" ] && SLOW=5
 
-tmp=$(mktemp -d)
-pids=()
-cleanup() {
-    for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null; done
-    rm -rf "$tmp"
-}
-trap cleanup EXIT
-
-check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
-    local desc=$1
-    shift
-    if "$@"; then echo "ok - $desc"; else echo "not ok - $desc"; fi
-}
+. tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt
 
 if [ ! -x "$BIN" ]; then
     echo "not ok - $BIN is not built"
@@ -45,36 +33,6 @@ echo 'secret' >"$tmp/web/secret.txt"
 echo 'hidden' >"$tmp/web/.hidden.js"
 echo 'outside' >"$tmp/outside.js"
 
-# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID
-start() {
-    local name=$1
-    shift
-    $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
-    PID=$!
-    pids+=("$PID")
-    URL=
-    for _ in $(seq 1 $((100 * SLOW))); do
-        URL=$(sed -n '1s|^listening on \(http://127\.0\.0\.1:[0-9]*\)/$|\1|p' "$tmp/$name.out")
-        [ -n "$URL" ] && return 0
-        sleep 0.05
-    done
-    return 1
-}
-
-# req METHOD PATH [CURL ARGS...]: sets STATUS; the body is in $tmp/body, headers in $tmp/hdrs
-req() {
-    local m=$1 p=$2
-    shift 2
-    if [ "$m" = HEAD ]; then set -- -I "$@"; else set -- -X "$m" "$@"; fi
-    STATUS=$(curl -s --max-time $((30 * SLOW)) -o "$tmp/body" -D "$tmp/hdrs" -w '%{http_code}' \
-        "$@" "$URL$p")
-}
-hdr() { # the value of header $1 of the last answer
-    grep -i "^$1:" "$tmp/hdrs" | head -n 1 | cut -d: -f2- | tr -d '\r' | sed 's/^ *//'
-}
-json() { # json ARGS... : jq -e over the last body
-    jq -e "$@" "$tmp/body" >/dev/null 2>&1
-}
 post() { # post ENDPOINT BODY: POST JSON to /v1/ENDPOINT
     req POST "/v1/$1" -H 'Content-Type: application/json' --data-binary "$2"
 }
@@ -84,10 +42,6 @@ problem() { # problem STATUS: the last answer is an RFC 9457 problem with that s
         json --argjson s "$1" '.status == $s and (.type | type == "string") and
             (.title | type == "string") and (.detail | type == "string")'
 }
-elapsed() { # elapsed T0: seconds since T0 (from date +%s.%N)
-    awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN { printf "%.3f", b - a }'
-}
-lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a < b) }'; }
 
 PSD='"psd":{"kind":"power","D":2.5,"k1":1,"k2":8,"C":0.0796}'
 # ~20 s of work (stopped by the max_seconds cap): keeps the only compute slot busy.
@@ -201,7 +155,7 @@ check "GET /nope: 404 problem" problem 404
 post nope "{$PSD}"
 check "POST /v1/nope: 404 problem" problem 404
 req GET /v1/simulations/abc
-check "GET /v1/simulations/abc (not there yet): 404 problem" problem 404
+check "GET /v1/simulations/abc (no such job): 404 problem" problem 404
 req GET /v1/adhesion
 check "GET /v1/adhesion: 405 problem with Allow: POST" \
     eval 'problem 405 && [ "$(hdr Allow)" = POST ]'
