@@ -1,0 +1,11 @@
+# harden.mk -- hardening (issue 8) besides the fuzzer (mk/fuzz.mk):
+#   make memcheck   the curl suite and the bad-input catalogue with the daemon under valgrind
+#                   memcheck (tests/memcheck/run.sh; make test runs it too)
+#   make bench      runs bench/load.sh with the other benchmarks: wrk against the daemon
+DEBS += valgrind wrk
+CMDS += valgrind:valgrind wrk:wrk
+
+.PHONY: memcheck
+memcheck: check-deps
+	@$(MAKE) --no-print-directory all
+	@BUILD=$(BUILD) tests/memcheck/run.sh
