@@ -15,6 +15,7 @@
 #include "ljgap.h"
 
 #include <errno.h>
+#include <fftw3.h>
 #include <gsl/gsl_errno.h>
 #include <signal.h>
 #include <stdio.h>
@@ -104,6 +105,7 @@ static void run_simulation(const char *body, size_t len, ljgap_reply *rep)
     sigaction(SIGINT, &old, NULL);
     if (b.last >= 0) fputc('\n', stderr);
     ljgap_sim_request_free(rq);
+    fftw_cleanup(); /* the run's FFTW planner state is global */
 }
 
 int main(int argc, char **argv)

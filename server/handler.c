@@ -17,6 +17,12 @@
  * its values on up to limits.sweep_threads threads; each value is independent, so the answer
  * is the sequential one.
  *
+ * Simulations (the discrete model, ljgap_sim.h) are not an endpoint of ljgap_handle: a run
+ * takes minutes. ljgap_sim_request_parse validates like every endpoint (same problems) and
+ * builds the PSD; ljgap_sim_request_run runs it under the caller's cancel flag, progress
+ * callback and time cap, and serialises the result. The daemon runs them as background jobs
+ * (jobs.c), the CLI in the foreground.
+ *
  * Problem types: the "type" member of every application/problem+json answer
  * (openapi.json lists the same set; keep them in step):
  *   https://ljgap.example/problems/malformed-json  400  the body is not one valid JSON value
@@ -31,7 +37,8 @@
  *   https://ljgap.example/problems/no-answer       422  no finite answer could be formed
  *                                                       (LJGAP_EFAIL)
  *   https://ljgap.example/problems/unavailable     503  the computation was cancelled
- *                                                       (server shutting down, LJGAP_ECANCEL)
+ *                                                       (server shutting down, a simulation
+ *                                                       cancelled; LJGAP_ECANCEL)
  *   https://ljgap.example/problems/out-of-memory   500  an allocation failed (LJGAP_ENOMEM)
  * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
  */

@@ -49,6 +49,7 @@
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <fftw3.h>
 #include <getopt.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_version.h>
@@ -956,6 +957,7 @@ int main(int argc, char **argv)
 end:
     if (web_fd >= 0) close(web_fd);
     ljgap_jobs_free(jobs);
+    fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
     http_cache_free(cache);
     return rc;
 }
