@@ -1,9 +1,10 @@
 /* fuzz_handler.c -- libFuzzer target on ljgap_handle, the one request handler.
  *
  * An input is "ENDPOINT\nBODY": the first line names the endpoint (adhesion, traction, pdf,
- * sweep, contact, or anything else for a 404), the rest is the request body, handed over in a
- * buffer of exactly its length (no NUL after it), so that any read past the end is caught by
- * AddressSanitizer. An input without a newline is all endpoint name and an empty body.
+ * sweep, contact, or anything else for a 404; "simulations" goes through
+ * ljgap_sim_request_parse and, when valid, ljgap_sim_request_run), the rest is the request body,
+ * handed over in a buffer of exactly its length (no NUL after it), so that any read past the end is
+ * caught by AddressSanitizer. An input without a newline is all endpoint name and an empty body.
  *
  * Besides crashes, leaks and undefined behaviour (the sanitizers), every answer is checked
  * against the contract (shared/docs/api.md) and the handler's own rules, and any breach
@@ -20,8 +21,8 @@
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
  *     pointer that names a member of the request or a missing member of one that exists.
  *
- * The handler's limits are lowered (fuzz_limits) so each input runs in milliseconds; a
- * computation that ignored them would trip libFuzzer's -timeout.
+ * The handler's limits are lowered (fuzz_limits, and sim_control for simulations) so each
+ * input runs in milliseconds; a computation that ignored them would trip libFuzzer's -timeout.
  *
  * The same file is linked into build/.../fuzz/replay (tests/fuzz/replay.c) with the normal
  * compiler: there a breach is counted (ljgap_fuzz_failures) instead of aborting.
@@ -49,6 +50,9 @@ long ljgap_fuzz_failures;
 /* The lowered limits: short computations, few points, few samples, two sweep threads. */
 static const ljgap_limits fuzz_limits = {
     .max_seconds = 0.25, .max_samples = 2000, .max_points = 16, .sweep_threads = 2, .cancel = NULL};
+
+/* A simulation runs for at most this long (it answers 422 cap-exceeded beyond). */
+static const ljgap_sim_control sim_control = {.max_seconds = 0.25};
 
 static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
@@ -212,7 +216,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     ep[eplen] = '\0';
     if (len) memcpy(body, nl + 1, len);
     known = ljgap_handler_has(ep);
-    ljgap_handle(ep, body, len, &r);
+    if (strcmp(ep, "simulations") == 0) {
+        ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, &r);
+        known = 1;
+        if (sr) ljgap_sim_request_run(sr, &sim_control, &r);
+        ljgap_sim_request_free(sr);
+    } else {
+        ljgap_handle(ep, body, len, &r);
+    }
     if (!r.body || !r.content_type) {
         breach(ep, &r, "no body or no content type");
         goto end;
