@@ -33,7 +33,9 @@
 
 #define PSD_TABLE_MAX 10000
 #define SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
-#define PTR_LEN 96                  /* room for every pointer built from known names */
+#define R_MIN 1e-12 /* contact: sphere radii (m) the model's pull-off forces stay finite for, */
+#define R_MAX 1e6   /* with room to spare (a subnormal R made Maugis-Dugdale's error NaN) */
+#define PTR_LEN 96  /* room for every pointer built from known names */
 
 static const char *const common_fields[] = {"psd",  "method",   "tol",   "vmax", "samples",
                                             "seed", "material", "units", NULL};
@@ -913,7 +915,9 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
         parse_sweep(e, root, lim, rq);
         break;
     case LJGAP_EP_CONTACT:
-        if ((R = required(e, root, "", "R", "the sphere's radius, m"))) num_pos(e, R, "/R", &rq->R);
+        if ((R = required(e, root, "", "R", "the sphere's radius, m")) &&
+            num_pos(e, R, "/R", &rq->R))
+            in_core_range(e, "/R", "R (m)", rq->R, R_MIN, R_MAX);
         break;
     }
     return e->n;
