@@ -129,8 +129,12 @@ int ljgap_md_pulloff(double lambda, ljgap_est *P_bar)
     if (!(m = gsl_min_fminimizer_alloc(gsl_min_fminimizer_brent))) return LJGAP_ENOMEM;
     if (gsl_min_fminimizer_set_with_values(m, &F, A[imin], P[imin], A[imin - 1], P[imin - 1],
                                            A[imin + 1], P[imin + 1])) {
+        /* Brent needs a strict bracket; near DMT (small λ) the load is flat to round-off
+         * around its minimum, so the grid's minimum is the answer, good to that spread */
         gsl_min_fminimizer_free(m);
-        return LJGAP_EFAIL;
+        *P_bar = (ljgap_est){
+            -P[imin], fmax(fabs(P[imin - 1] - P[imin]), fabs(P[imin + 1] - P[imin])) + 1e-13};
+        return LJGAP_OK;
     }
     for (int i = 0; i < MD_ITER; i++) {
         if (gsl_min_fminimizer_iterate(m)) break;

@@ -33,9 +33,18 @@
 
 #define PSD_TABLE_MAX 10000
 #define SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
-#define R_MIN 1e-12 /* contact: sphere radii (m) the model's pull-off forces stay finite for, */
-#define R_MAX 1e6   /* with room to spare (a subnormal R made Maugis-Dugdale's error NaN) */
-#define PTR_LEN 96  /* room for every pointer built from known names */
+/* Physical ranges of the material block and the contact sphere (SI). Far beyond any solid, but
+ * bounded: with E*, Δγ, ε and R anywhere in double range, the contact answer's Tabor
+ * parameters and Maugis-Dugdale error under- or overflowed to NaN (found by the fuzzer). */
+#define E_MIN 1e3 /* moduli E*, E1, E2 (Pa): a soft gel to beyond diamond */
+#define E_MAX 1e13
+#define DGAMMA_MIN 1e-6 /* work of adhesion Δγ (J/m²) */
+#define DGAMMA_MAX 1e3
+#define EPS_MIN 1e-12 /* Lennard-Jones length ε (m) */
+#define EPS_MAX 1e-6
+#define R_MIN 1e-12 /* sphere radius R (m) */
+#define R_MAX 1e6
+#define PTR_LEN 96 /* room for every pointer built from known names */
 
 static const char *const common_fields[] = {"psd",  "method",   "tol",   "vmax", "samples",
                                             "seed", "material", "units", NULL};
@@ -509,13 +518,14 @@ static int poisson(ljgap_verr *e, const cJSON *obj, const char *name, double *nu
     return 0;
 }
 
-/* A positive number at obj[name] (pointer /material/name), recording "missing" if absent. */
-static int positive(ljgap_verr *e, const cJSON *obj, const char *name, const char *what, double *x)
+/* A number in [lo, hi] at obj[name] (pointer /material/name), recording "missing" if absent. */
+static int positive(ljgap_verr *e, const cJSON *obj, const char *name, const char *what, double lo,
+                    double hi, double *x)
 {
     char ptr[PTR_LEN];
     const cJSON *it = required(e, obj, "/material", name, what);
     snprintf(ptr, sizeof ptr, "/material/%s", name);
-    return it && num_pos(e, it, ptr, x);
+    return it && num_pos(e, it, ptr, x) && in_core_range(e, ptr, name, *x, lo, hi);
 }
 
 /* The material block (required when need): E* directly or from two bodies, Δγ, ε. */
@@ -545,26 +555,30 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
             ljgap_verr_add(e, ptr, "give E_star or E1, nu1, E2, nu2, not both");
             ok = 0;
         }
-        ok &= num_pos(e, Es, "/material/E_star", &E);
+        ok &= num_pos(e, Es, "/material/E_star", &E) &&
+              in_core_range(e, "/material/E_star", "E_star", E, E_MIN, E_MAX);
     } else if (!member(m, "E1") && !member(m, "E2") && !member(m, "nu1") && !member(m, "nu2")) {
         ljgap_verr_add(e, "/material/E_star",
                        "missing the modulus: give E_star (Pa) or E1, nu1, E2, nu2 "
                        "(1/E* = (1-ν1²)/E1 + (1-ν2²)/E2)");
         ok = 0;
     } else {
-        ok &= positive(e, m, "E1", "Young's modulus of body 1, Pa", &E1);
+        ok &= positive(e, m, "E1", "Young's modulus of body 1, Pa", E_MIN, E_MAX, &E1);
         ok &= poisson(e, m, "nu1", &nu1);
-        ok &= positive(e, m, "E2", "Young's modulus of body 2, Pa", &E2);
+        ok &= positive(e, m, "E2", "Young's modulus of body 2, Pa", E_MIN, E_MAX, &E2);
         ok &= poisson(e, m, "nu2", &nu2);
         if (ok && ljgap_units_E_star(E1, nu1, E2, nu2, &E) != LJGAP_OK) {
             ljgap_verr_add(e, "/material",
                            "E* = 1/((1-ν1²)/E1 + (1-ν2²)/E2) is not a finite "
                            "positive number");
             ok = 0;
+        } else if (ok) {
+            ok = in_core_range(e, "/material", "E* = 1/((1-ν1²)/E1 + (1-ν2²)/E2)", E, E_MIN, E_MAX);
         }
     }
-    ok &= positive(e, m, "dgamma", "work of adhesion Δγ of the flat surfaces, J/m²", &dg);
-    ok &= positive(e, m, "epsilon", "Lennard-Jones length ε, m", &eps);
+    ok &= positive(e, m, "dgamma", "work of adhesion Δγ of the flat surfaces, J/m²", DGAMMA_MIN,
+                   DGAMMA_MAX, &dg);
+    ok &= positive(e, m, "epsilon", "Lennard-Jones length ε, m", EPS_MIN, EPS_MAX, &eps);
     if (!ok) return;
     if (ljgap_material_set(&rq->mat, E, dg, eps) != LJGAP_OK ||
         !(isfinite(ljgap_units_chi(&rq->mat)) && ljgap_units_chi(&rq->mat) > 0 &&

@@ -18,13 +18,9 @@ BUILD=${BUILD:-build}
 BIN=$BUILD/ljgapd
 CLI=$BUILD/ljgap
 WRAP=${WRAP:-}
-tmp=$(mktemp -d)
-PID=
-cleanup() {
-    [ -n "$PID" ] && kill -KILL "$PID" 2>/dev/null
-    rm -rf "$tmp"
-}
-trap cleanup EXIT
+SLOW=1 # multiplier for time bounds
+[ -n "$WRAP" ] && SLOW=5
+. tests/lib/daemon.sh # start, req, hdr; the scratch directory $tmp
 
 for b in "$BIN" "$CLI"; do
     if [ ! -x "$b" ]; then
@@ -59,15 +55,7 @@ awk -v p="$PSD" 'BEGIN { printf "{%s,\"vary\":\"m0\",\"values\":[", p; for (i = 
     gen over-1-MiB 'adhesion 413 -'
 
 # ---- the daemon ----
-$WRAP "$BIN" --port 0 >"$tmp/d.out" 2>"$tmp/d.err" &
-PID=$!
-URL=
-for _ in $(seq 1 400); do
-    URL=$(sed -n '1s|^listening on \(http://127\.0\.0\.1:[0-9]*\)/$|\1|p' "$tmp/d.out")
-    [ -n "$URL" ] && break
-    sleep 0.05
-done
-if [ -z "$URL" ]; then
+if ! start d; then
     echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/d.err")"
     exit 1
 fi
@@ -88,23 +76,22 @@ for f in tests/bad_inputs/cases/*.req "$tmp"/gen/*.req; do
         continue
     fi
     [ "$ptr" = '""' ] && ptr=
-    tail -n +2 "$f" >"$tmp/body"
+    tail -n +2 "$f" >"$tmp/request"
     case ${ctype:-application/json} in
     none) hdr=(-H 'Content-Type:') ;;
     *) hdr=(-H "Content-Type: ${ctype:-application/json}") ;;
     esac
-    got=$(curl -s --max-time 60 -o "$tmp/answer" -D "$tmp/hdrs" -w '%{http_code}' \
-        "${hdr[@]}" --data-binary @"$tmp/body" "$URL/v1/$ep")
-    type=$(grep -i '^content-type:' "$tmp/hdrs" | head -n 1 | cut -d: -f2- | tr -d '\r ')
-    if [ "$got" = "$status" ] && [ "$type" = application/problem+json ] &&
-        has_problem "$tmp/answer" "$status" "$ptr"; then
+    req POST "/v1/$ep" "${hdr[@]}" --data-binary @"$tmp/request"
+    type=$(hdr Content-Type)
+    if [ "$STATUS" = "$status" ] && [ "$type" = application/problem+json ] &&
+        has_problem "$tmp/body" "$status" "$ptr"; then
         echo "ok - bad input $name: HTTP $status${ptr:+ at $ptr}"
     else
-        echo "not ok - bad input $name: HTTP $got ($type), expected $status at '$ptr':" \
-            "$(head -c 300 "$tmp/answer")"
+        echo "not ok - bad input $name: HTTP $STATUS ($type), expected $status at '$ptr':" \
+            "$(head -c 300 "$tmp/body")"
     fi
     case $status in 400 | 404 | 422) ;; *) continue ;; esac
-    "$CLI" "$ep" "$tmp/body" >"$tmp/answer" 2>/dev/null
+    "$CLI" "$ep" "$tmp/request" >"$tmp/answer" 2>/dev/null
     rc=$?
     if [ "$rc" = 1 ] && has_problem "$tmp/answer" "$status" "$ptr"; then
         echo "ok - bad input $name: CLI $status${ptr:+ at $ptr}"
@@ -114,14 +101,14 @@ for f in tests/bad_inputs/cases/*.req "$tmp"/gen/*.req; do
     fi
 done
 
-req_ok=$(curl -s --max-time 5 -o /dev/null -w '%{http_code}' "$URL/healthz")
+req GET /healthz
+req_ok=$STATUS
 kill -TERM "$PID"
 wait "$PID"
 rc=$?
-PID=
 if [ "$req_ok" = 200 ] && [ "$rc" = 0 ]; then
     echo "ok - the daemon served /healthz after the catalogue and exited 0 on SIGTERM"
 else
     echo "not ok - after the catalogue: /healthz $req_ok, exit status $rc:" \
-        "$(grep -v '^[A-Z]* /' "$tmp/d.err" | tail -n 20)"
+        "$(grep -v "^[A-Z]* /" "$tmp/d.err" | tail -n 20)"
 fi

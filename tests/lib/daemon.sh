@@ -21,6 +21,7 @@ check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
 start() {
     local name=$1
     shift
+    : >"$tmp/$name.out" # exists before the first look below, however slow the start
     $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
     PID=$!
     pids+=("$PID")
