@@ -102,6 +102,8 @@ check "GET /: index.html as text/html, titled ljgap, linking /openapi.json" \
     eval '[ "$STATUS" = 200 ] &&
     [[ "$(hdr Content-Type)" == text/html* ]] && grep -q "<title>ljgap</title>" "$tmp/body" &&
     grep -q "/openapi.json" "$tmp/body"'
+check "GET /: Content-Security-Policy default-src 'self'" \
+    eval '[ "$(hdr Content-Security-Policy)" = "default-src '"'"'self'"'"'" ]'
 req GET /index.html
 check "GET /index.html: the same page" cmp -s "$tmp/body" web/index.html
 for f in "app.js text/javascript" "style.css text/css" "pic.png image/png" \
