@@ -26,7 +26,7 @@ if ! command -v valgrind >/dev/null; then
     exit 1
 fi
 export BUILD
-export WRAP="valgrind --leak-check=full --show-leak-kinds=definite,indirect \
+export WRAP="valgrind --fair-sched=yes --leak-check=full --show-leak-kinds=definite,indirect \
 --errors-for-leak-kinds=definite,indirect --error-exitcode=99"
 for suite in tests/http/run.sh tests/bad_inputs/run.sh; do
     "$suite" 2>&1 | sed -e 's/^ok - /ok - memcheck: /' -e 's/^not ok - /not ok - memcheck: /'
