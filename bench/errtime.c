@@ -369,7 +369,7 @@ int main(int argc, char **argv)
     reference();
     /* the ladders: settings as printed (Vmax as 1/x) */
     static const double lev6[] = {0, 1, 2, 3, 4, 5, 6}, lev7[] = {0, 1, 2, 3, 4, 5, 6, 7};
-    static const double dtol[] = {1e-6, 1e-7, 1e-8, 1e-9}, ptol[] = {1e-4, 1e-6, 1e-7};
+    static const double dtol[] = {1e-6, 1e-7, 1e-8, 1e-9}, ptol[] = {1e-4, 1e-5, 1e-6};
     static const double dvm[] = {25, 50, 100, 200, 400, 800, 1600, 3200};
     static const double pvm[] = {10, 20, 40, 80, 160, 320, 640, 1280, 2560, 5120};
     static const double dN[] = {250, 500, 1000, 2000, 4000};
