@@ -16,13 +16,14 @@
  *    at a ladder of tol, what a user of the API pays;
  *  - paper: one level of the paper's iteration at Vmax (grid h = min(0.005, √Vmax/10)), no
  *    refinement, Vmax halving from 1/25 (dgamma) or 1/10 (pdf); the ladder stops at
- *    Vmax = 1/3200 (dgamma, ~25 s a run) and 1/5120 (pdf, ~16 s): each halving costs 2.8-4x;
+ *    Vmax = 1/3200 (dgamma, ~17 s a run) and 1/5120 (pdf, ~13 s): each halving costs 2.8-3x;
  *  - montecarlo: the public Monte Carlo (paths at step control c and 2c, bias-corrected) at a
  *    ladder of samples, seeds 1, 2, 3; error is the root mean square over the seeds (one run
  *    is a random draw), the time the median. The PDF is a histogram of bin width
  *    0.5 N^(-1/3) (Scott's rule for a spread ~0.15).
- * Reference: the public PDE at tol 1e-10 (dgamma, work cap raised) and 1e-10 (pdf), each with
- * its own error estimate, cross-checked against Monte Carlo (printed).
+ * Reference: the public PDE at tol 1e-10 (work cap raised), with its own error estimate,
+ * cross-checked against Monte Carlo (printed). Equal-error ratios: the paper's last rung
+ * against the PDE's lines, interpolated (or, flagged, extrapolated) log-log (time_at_error).
  */
 #include "bench.h"
 #include "ljgap.h"
