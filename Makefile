@@ -35,6 +35,7 @@ else
 Q := @
 endif
 
+.DEFAULT_GOAL := all
 include $(sort $(wildcard mk/*.mk))
 
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)

@@ -16,9 +16,9 @@
  *  - each band moves the mass p_j of grid point j to the points within 8√V_j with weights
  *    ∝ exp(-(g_i - g_j)^2 / 2V_j) normalized to sum 1 (mass is conserved exactly; the mean
  *    too, except for what the lower end cuts off: that "leak" is measured and reported).
- *    A packet narrower than the grid (V_j < h^2) goes to three points with the Gaussian's
- *    exact mass, mean and variance instead: the sampled Gaussian would keep its mass in
- *    place and lose V_j. The start δ(g - g_ave) is split linearly between the two
+ *    A packet narrower than the grid (V_j < h^2) goes to five points with the Gaussian's
+ *    exact mass, mean and variance instead (a three-point kernel applied twice): the
+ *    sampled Gaussian would keep its mass in place and lose V_j. The start δ(g - g_ave) is split linearly between the two
  *    neighbouring points (mass and mean exact).
  *  - the traction curve comes from the transposed iteration u <- T^T u, u = sigma(g_i) at
  *    the end, which gives sigma_bar at every grid point in one pass with the same arithmetic
@@ -38,7 +38,9 @@
  * until err <= tol max(1, |value|) or the work cap (grid points x window, summed over bands
  * and levels: o->max_work) or o->max_seconds is reached, with a warning at the cap. Each
  * halving costs about 2√2 times the previous level (5.7 times below Vmax = 1/400, where h
- * halves too): the method is the baseline to compare with, not the fast one.
+ * halves too): the method is the baseline to compare with, not the fast one. With
+ * o->fixed_vmax the answer is the level at o->vmax itself (as the paper's figures show it),
+ * with 3 |r(V) - r(V/2)| as its error and a warning if that misses tol.
  */
 #include "paper.h"
 
@@ -196,12 +198,19 @@ static void band_apply(ljgap__paper_ws *ws, const ljgap_psd *psd, size_t b, cons
             /* Narrower than the grid: the sampled Gaussian would keep (almost) all the mass
              * in place and lose the variance V, at every band, wherever f is small (near
              * the wall, and everywhere but g* at a stiff start), so the iteration would
-             * converge to a wrong limit as Vmax and h shrink together. Three points carrying
-             * the Gaussian's mass, mean and variance exactly are its projection on the grid. */
-            double a = V / (h * h);
-            e[0] = 1.0 - a;
-            e[1] = 0.5 * a;
-            M = 1;
+             * converge to a wrong limit as Vmax and h shrink together. Instead five points
+             * carry the Gaussian's mass, mean and variance exactly: the three-point kernel
+             * (b, 1 - 2b, b), b = V/4h^2 <= 1/4, applied twice. (Once, with b = V/2h^2, it
+             * would tend to (1/2, 0, 1/2) as V -> h^2 and, applied where V is just below h^2,
+             * leave a checkerboard in the PDF: peaks 10 % off at Vmax = 1/160 and 1/250 for
+             * Fig. 2. The twice-applied kernel's symbol is a square, so it damps every grid
+             * mode, and at V = h^2 it is the binomial (1, 4, 6, 4, 1)/16, close to the
+             * sampled Gaussian that takes over there.) */
+            double b4 = V / (4.0 * h * h);
+            e[0] = (1.0 - 2.0 * b4) * (1.0 - 2.0 * b4) + 2.0 * b4 * b4;
+            e[1] = 2.0 * b4 * (1.0 - 2.0 * b4);
+            e[2] = b4 * b4;
+            M = ws->emax < 2 ? ws->emax : 2;
         } else {
             double half = PAPER_WIN * sqrt(V) / h;
             M = half < (double)ws->emax ? (size_t)half : ws->emax;
@@ -465,6 +474,21 @@ static double level_err(double d, double *dprev, int have_pair)
     return e;
 }
 
+/* With fixed_vmax the answer at Vmax is kept and its error is FIXED_ERR times its change at
+ * Vmax/2: 2 would be the first-order limit (Σ 2^-k), but the first halvings are irregular
+ * (Fig. 2 PDF at Vmax = 1/10 .. 1/400 against the PDE: actual/estimate up to 1.27 with 2,
+ * at most 0.85 with 3). */
+#define FIXED_ERR 3.0
+
+/* With fixed_vmax, the warning when the answer at Vmax misses the tolerance. */
+static void fixed_warn(const ljgap_opts *o, ljgap_warnings *w)
+{
+    ljgap_warn(w,
+               "paper: the answer at the fixed Vmax = %g is not refined; its error estimate "
+               "(3 times the change at Vmax/2) is above the tolerance",
+               o->vmax);
+}
+
 int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                          ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
@@ -525,6 +549,12 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
                        "|sigma| = %.3g)",
                        ts.g_lo, imp1);
         vmax *= 0.5;
+        if (o->fixed_vmax) { /* keep v0, the answer at o->vmax; first order in Vmax */
+            for (size_t i = 0; i < nv; i++)
+                err[i] = FIXED_ERR * fabs(v1[i] - v0[i]);
+            if (!converged(v0, err, nv, tol)) fixed_warn(o, w);
+            break;
+        }
         for (size_t i = 0; i < nv; i++)
             err[i] = level_err(fabs(v1[i] - v0[i]), &dprev[i], have_pair);
         memcpy(v0, v1, nv * sizeof *v0);
@@ -741,6 +771,16 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
         if (level_timed_out(&st, have_pair, vmax, w)) break;
         if (st) goto end;
         vmax *= 0.5;
+        if (o->fixed_vmax) { /* keep A, the answer at o->vmax; first order in Vmax */
+            int miss = 0;
+            for (size_t s = 0; s < nk2; s++) {
+                serr[s] = FIXED_ERR * fabs(pdf_sigma(&B, B.p + s * B.n) - sig[s]);
+                perr[s] = FIXED_ERR * pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n);
+                if (serr[s] > tol * fmax(1.0, fabs(sig[s])) || perr[s] > tol) miss = 1;
+            }
+            if (miss) fixed_warn(o, w);
+            break;
+        }
         int ok = 1;
         for (size_t s = 0; s < nk2; s++) {
             double sb = pdf_sigma(&B, B.p + s * B.n);

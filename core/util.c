@@ -45,6 +45,7 @@ void ljgap_opts_default(ljgap_opts *o)
     o->method = LJGAP_METHOD_PDE;
     o->tol = 1e-6;
     o->vmax = 1.0 / 400.0;
+    o->fixed_vmax = 0;
     o->samples = 100000;
     o->seed = 1;
     o->max_seconds = 20.0;

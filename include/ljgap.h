@@ -117,6 +117,8 @@ typedef struct {
     ljgap_method method;
     double tol;                 /* |err| <= tol*max(1,|value|) is the target (1e-6) */
     double vmax;                /* paper: band variance bound Vmax (1/400) */
+    int fixed_vmax;             /* paper: answer at vmax itself, not refined to tol (0); its
+                                 * error is then 3|v(vmax) - v(vmax/2)| */
     long samples;               /* montecarlo: number of paths (1e5) */
     unsigned long seed;         /* montecarlo: seed (1) */
     double max_seconds;         /* wall-time cap of one computation (20 s) */

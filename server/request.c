@@ -46,8 +46,8 @@
 #define R_MAX 1e6
 #define PTR_LEN 96 /* room for every pointer built from known names */
 
-static const char *const common_fields[] = {"psd",  "method",   "tol",   "vmax", "samples",
-                                            "seed", "material", "units", NULL};
+static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax", "fixed_vmax",
+                                            "samples", "seed",   "material", "units", NULL};
 static const char *const contact_fields[] = {"R", NULL};
 static const char *const material_fields[] = {"E_star", "E1",     "nu1",     "E2",
                                               "nu2",    "dgamma", "epsilon", NULL};
@@ -633,6 +633,12 @@ static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *l
             ljgap_verr_add(e, "/vmax", "vmax = %g is outside (0, 1]", x);
         if (rq->opts.method != LJGAP_METHOD_PAPER)
             ljgap_warn(&rq->warn, "vmax is used by method \"paper\" only and was ignored");
+    }
+    if ((it = member(root, "fixed_vmax"))) {
+        if (!cJSON_IsBool(it))
+            ljgap_verr_add(e, "/fixed_vmax", "fixed_vmax must be true or false");
+        else if ((rq->opts.fixed_vmax = cJSON_IsTrue(it)) && rq->opts.method != LJGAP_METHOD_PAPER)
+            ljgap_warn(&rq->warn, "fixed_vmax is used by method \"paper\" only and was ignored");
     }
     if ((it = member(root, "samples")) &&
         num_int(e, it, "/samples", 100, (double)lim->max_samples, &x)) {

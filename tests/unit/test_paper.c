@@ -188,13 +188,110 @@ static void test_caps(void **state)
     assert_int_equal(ljgap_traction(&psd, &o, &g, 1, &sg, NULL, &w2), LJGAP_ECAP);
 }
 
+/* Packets just narrower than the grid (V a little below h^2) must not leave a checkerboard: a
+ * three-point kernel tends to (1/2, 0, 1/2) there and made the Fig. 2 PDF jagged at some Vmax
+ * (total variation 19.3 at Vmax = 1/160 against 13.7 at 1/400). The PDF at every Vmax has the
+ * total variation of a smooth unimodal curve, ≈ 2 x peak. */
+static void test_no_checkerboard(void **state)
+{
+    (void)state;
+    ljgap_psd psd;
+    fig2_psd(&psd, 5.0);
+    ljgap_opts o;
+    ljgap_opts_default(&o);
+    const double vm[6] = {1.0 / 80, 1.0 / 100, 1.0 / 125, 1.0 / 160, 1.0 / 250, 1.0 / 400};
+    for (int t = 0; t < 6; t++) {
+        ljgap_pdf a;
+        assert_int_equal(ljgap__paper_pdf_at(&psd, &o, vm[t], 0.98, 5.0, NULL, &a), LJGAP_OK);
+        double tv = 0.0, pk = 0.0;
+        for (size_t i = 0; i + 1 < a.n; i++)
+            tv += fabs(a.phi[i + 1] - a.phi[i]);
+        for (size_t i = 0; i < a.n; i++)
+            pk = fmax(pk, a.phi[i]);
+        printf("  Vmax = 1/%-4.0f  peak %.4f  total variation %.3f\n", 1.0 / vm[t], pk, tv);
+        assert_true(tv < 2.02 * pk);
+        ljgap_pdf_release(&a, 1);
+    }
+}
+
+/* fixed_vmax: the answer is the level at vmax itself (as ljgap__paper_pdf_at and
+ * ljgap__paper_summary_at give it, up to the driver's placing of the lower grid end), and its error estimate 3|r(V) - r(V/2)| covers the actual
+ * error against the PDE (an independent method, converged to 1e-7). */
+static void test_fixed_vmax(void **state)
+{
+    (void)state;
+    ljgap_psd psd;
+    fig2_psd(&psd, 5.0);
+    ljgap_opts o, op;
+    ljgap_opts_default(&o);
+    ljgap_opts_default(&op);
+    op.tol = 1e-7;
+    o.method = LJGAP_METHOD_PAPER;
+    o.fixed_vmax = 1;
+    o.tol = 0.1;
+    const double grid[3] = {0.5, 4.0, 3501};
+    ljgap_pdf ref;
+    assert_int_equal(ljgap_pdf_pde(&psd, &op, 0.98, &psd.k2, 1, grid, &ref, NULL), LJGAP_OK);
+    const double vm[4] = {1.0 / 10, 1.0 / 20, 1.0 / 40, 1.0 / 400};
+    for (int t = 0; t < 4; t++) {
+        o.vmax = vm[t];
+        ljgap_pdf a, b, c;
+        ljgap_warnings w = {0};
+        assert_int_equal(ljgap_pdf_compute(&psd, &o, 0.98, &psd.k2, 1, NULL, &a, &w), LJGAP_OK);
+        assert_int_equal(ljgap__paper_pdf_at(&psd, &o, vm[t], 0.98, 5.0, NULL, &b), LJGAP_OK);
+        assert_int_equal(a.n, b.n);
+        for (size_t i = 0; i < a.n; i++)
+            assert_true(a.phi[i] == b.phi[i]);
+        assert_true(a.sigma.value == b.sigma.value);
+        /* actual error against the PDE, on the PDE's grid */
+        assert_int_equal(ljgap_pdf_compute(&psd, &o, 0.98, &psd.k2, 1, grid, &c, NULL), LJGAP_OK);
+        double l1 = 0.0, dg = (grid[1] - grid[0]) / (grid[2] - 1);
+        for (size_t i = 0; i < c.n; i++)
+            l1 += fabs(c.phi[i] - ref.phi[i]) * dg;
+        double ds = fabs(c.sigma.value - ref.sigma.value);
+        printf("  Vmax = 1/%-4.0f  L1 %.4f (est %.4f)  sigma %.4f (est %.4f)  warnings %d\n",
+               1.0 / vm[t], l1, a.phi_err, ds, a.sigma.err, w.n);
+        assert_true(l1 <= a.phi_err && a.phi_err < 4 * l1);
+        assert_true(ds <= a.sigma.err && a.sigma.err < 6 * ds);
+        assert_true(w.n >= 1 || (a.phi_err <= o.tol && a.sigma.err <= o.tol * fmax(1, fabs(a.sigma.value))));
+        ljgap_pdf_release(&a, 1);
+        ljgap_pdf_release(&b, 1);
+        ljgap_pdf_release(&c, 1);
+    }
+    ljgap_pdf_release(&ref, 1);
+
+    /* the summary: the level at vmax, error covering the PDE's answer */
+    ljgap_psd full;
+    fig2_psd(&full, INFINITY);
+    o.vmax = 1.0 / 40;
+    o.tol = 1e-6;
+    ljgap_summary s, s1, sp;
+    ljgap_warnings w = {0};
+    assert_int_equal(ljgap_traction(&full, &o, NULL, 0, NULL, &s, &w), LJGAP_OK);
+    assert_int_equal(ljgap__paper_summary_at(&full, &o, 1.0 / 40, &s1), LJGAP_OK);
+    assert_int_equal(ljgap_traction(&full, &op, NULL, 0, NULL, &sp, NULL), LJGAP_OK);
+    printf("  adhesion at Vmax = 1/40: g_eq %.5f +- %.2g (PDE %.5f), dgamma %.5f +- %.2g (PDE "
+           "%.5f)\n",
+           s.g_eq.value, s.g_eq.err, sp.g_eq.value, s.dgamma_eff.value, s.dgamma_eff.err,
+           sp.dgamma_eff.value);
+    printf("  level alone (lower end not moved): g_eq %.6f dgamma %.6f\n", s1.g_eq.value, s1.dgamma_eff.value);
+    /* the driver also moves the lower grid end (tol 1e-6): a small change beside the error */
+    assert_true(fabs(s.g_eq.value - s1.g_eq.value) < 0.05 * s.g_eq.err);
+    assert_true(fabs(s.dgamma_eff.value - s1.dgamma_eff.value) < 0.05 * s.dgamma_eff.err);
+    assert_true(fabs(s.g_eq.value - sp.g_eq.value) <= s.g_eq.err);
+    assert_true(fabs(s.dgamma_eff.value - sp.dgamma_eff.value) <= s.dgamma_eff.err);
+    assert_true(fabs(s.sigma_max.value - sp.sigma_max.value) <= s.sigma_max.err);
+    assert_true(w.n >= 1); /* tol 1e-6 is missed at a fixed Vmax = 1/40: said so */
+}
+
 int main(void)
 {
     gsl_set_error_handler_off();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fig2_inset),     cmocka_unit_test(test_transposed_equals_forward),
         cmocka_unit_test(test_pdf_invariants), cmocka_unit_test(test_fig4_reference),
-        cmocka_unit_test(test_caps),
+        cmocka_unit_test(test_caps),           cmocka_unit_test(test_no_checkerboard),
+        cmocka_unit_test(test_fixed_vmax),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -154,6 +154,12 @@ test("Fig. 2 preset: the paper's iteration, one PDF per Vmax", async () => {
   const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("pdf")));
   assert.deepEqual(json.requests.map((r) => r.body.vmax), [0.1, 0.05, 0.025, 0.0025]);
   assert.ok(json.requests.every((r) => r.body.method === "paper" && r.body.psd.C === 0.0795775));
+  assert.ok(json.requests.every((r) => r.body.fixed_vmax === true));
+  // the inset of the paper's Fig. 2 (theory.md §4): peaks ≈ 5.5, 6.1, 6.5, 6.7 near g̃ = 0.89,
+  // rising as Vmax falls (values read off the figure: 6 %)
+  const peaks = fig.series.map((s) => Math.max(...s.y.filter((v) => v !== null)));
+  [5.5, 6.1, 6.5, 6.7].forEach((ref, i) => assert.ok(Math.abs(peaks[i] - ref) < 0.06 * ref, `peak ${peaks[i]} vs ${ref}`));
+  for (let i = 1; i < 4; i++) assert.ok(peaks[i] > peaks[i - 1], String(peaks));
 });
 
 test("Fig. 5 preset: sweep on a log axis, Δγeff and σ̄max fall as m̃0 grows", async () => {
