@@ -36,6 +36,8 @@ Q := @
 endif
 
 .DEFAULT_GOAL := all
+# keep the objects of chained rules (test and bench objects): no rebuild on the next make
+.SECONDARY:
 include $(sort $(wildcard mk/*.mk))
 
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)

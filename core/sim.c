@@ -614,6 +614,10 @@ int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g
             goto end;
         }
     }
+    if (R == 1)
+        ljgap_warn(w, "simulation: one realization: its spread is unknown, so sigma_std is 0 and "
+                      "the error holds only the solver's residual; ask for 2 or more "
+                      "realizations for an error estimate");
     if (unconverged)
         ljgap_warn(w,
                    "simulation: the residual target %g was not met everywhere (max_iter = %ld); "

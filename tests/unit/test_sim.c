@@ -185,6 +185,25 @@ static void seeds(void **state)
     ljgap_sim_result_free(&c);
 }
 
+/* One realization has no spread to estimate an error from: the answer says so. */
+static void one_realization_warns(void **state)
+{
+    ljgap_psd p = fig6_psd(0.218, 8.0);
+    double g = 2.0;
+    ljgap_sim_result r;
+    for (int R = 1; R <= 2; R++) {
+        ljgap_sim_opts o = opts(16, R);
+        ljgap_warnings w = {0};
+        assert_int_equal(ljgap_sim_run(&p, &o, &g, 1, &r, &w), LJGAP_OK);
+        int said = 0;
+        for (int i = 0; i < w.n; i++)
+            said |= strstr(w.msg[i], "one realization") != NULL;
+        assert_int_equal(said, R == 1);
+        assert_true(R == 1 ? r.sigma_std[0] == 0.0 : r.sigma_std[0] > 0.0);
+        ljgap_sim_result_free(&r);
+    }
+}
+
 /* 2*pi/L < k0: the flat state loses stability near g = 1.72 (where 3g^-4 - 9g^-10 = 2*pi/L),
  * the inward sweep jumps there and the outward branch differs; far from it both agree. With
  * the default L the energy is convex: no jump, one branch. */
@@ -318,7 +337,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(variance),   cmocka_unit_test(residual_met),
         cmocka_unit_test(flat_is_lj), cmocka_unit_test(small_roughness_vs_theory),
-        cmocka_unit_test(seeds),      cmocka_unit_test(hysteresis),
+        cmocka_unit_test(seeds),
+        cmocka_unit_test(one_realization_warns),      cmocka_unit_test(hysteresis),
         cmocka_unit_test(control),    cmocka_unit_test(bad_inputs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
