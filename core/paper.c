@@ -18,8 +18,8 @@
  *    too, except for what the lower end cuts off: that "leak" is measured and reported).
  *    A packet narrower than the grid (V_j < h^2) goes to five points with the Gaussian's
  *    exact mass, mean and variance instead (a three-point kernel applied twice): the
- *    sampled Gaussian would keep its mass in place and lose V_j. The start δ(g - g_ave) is split linearly between the two
- *    neighbouring points (mass and mean exact).
+ *    sampled Gaussian would keep its mass in place and lose V_j. The start δ(g - g_ave) is
+ *    split linearly between the two neighbouring points (mass and mean exact).
  *  - the traction curve comes from the transposed iteration u <- T^T u, u = sigma(g_i) at
  *    the end, which gives sigma_bar at every grid point in one pass with the same arithmetic
  *    as a forward run from each point; between points it is interpolated linearly, which
@@ -549,14 +549,14 @@ int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double
                        "|sigma| = %.3g)",
                        ts.g_lo, imp1);
         vmax *= 0.5;
-        if (o->fixed_vmax) { /* keep v0, the answer at o->vmax; first order in Vmax */
-            for (size_t i = 0; i < nv; i++)
-                err[i] = FIXED_ERR * fabs(v1[i] - v0[i]);
+        for (size_t i = 0; i < nv; i++) {
+            double d = fabs(v1[i] - v0[i]);
+            err[i] = o->fixed_vmax ? FIXED_ERR * d : level_err(d, &dprev[i], have_pair);
+        }
+        if (o->fixed_vmax) { /* keep v0, the answer at o->vmax */
             if (!converged(v0, err, nv, tol)) fixed_warn(o, w);
             break;
         }
-        for (size_t i = 0; i < nv; i++)
-            err[i] = level_err(fabs(v1[i] - v0[i]), &dprev[i], have_pair);
         memcpy(v0, v1, nv * sizeof *v0);
         have_pair = 1;
         if (converged(v0, err, nv, tol)) break;
@@ -771,23 +771,23 @@ int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, con
         if (level_timed_out(&st, have_pair, vmax, w)) break;
         if (st) goto end;
         vmax *= 0.5;
-        if (o->fixed_vmax) { /* keep A, the answer at o->vmax; first order in Vmax */
-            int miss = 0;
-            for (size_t s = 0; s < nk2; s++) {
-                serr[s] = FIXED_ERR * fabs(pdf_sigma(&B, B.p + s * B.n) - sig[s]);
-                perr[s] = FIXED_ERR * pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n);
-                if (serr[s] > tol * fmax(1.0, fabs(sig[s])) || perr[s] > tol) miss = 1;
-            }
-            if (miss) fixed_warn(o, w);
-            break;
-        }
         int ok = 1;
         for (size_t s = 0; s < nk2; s++) {
             double sb = pdf_sigma(&B, B.p + s * B.n);
-            serr[s] = level_err(fabs(sb - sig[s]), &sprev[s], have_pair);
-            perr[s] = level_err(pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n), &pprev[s], have_pair);
-            sig[s] = sb;
-            if (serr[s] > tol * fmax(1.0, fabs(sb)) || perr[s] > tol) ok = 0;
+            double ds = fabs(sb - sig[s]), dl = pdf_l1(&A, A.p + s * A.n, &B, B.p + s * B.n);
+            if (o->fixed_vmax) { /* A and sig stay: the answer at o->vmax */
+                serr[s] = FIXED_ERR * ds;
+                perr[s] = FIXED_ERR * dl;
+            } else {
+                serr[s] = level_err(ds, &sprev[s], have_pair);
+                perr[s] = level_err(dl, &pprev[s], have_pair);
+                sig[s] = sb;
+            }
+            if (serr[s] > tol * fmax(1.0, fabs(sig[s])) || perr[s] > tol) ok = 0;
+        }
+        if (o->fixed_vmax) {
+            if (!ok) fixed_warn(o, w);
+            break;
         }
         pdf_level_free(&A);
         A = B;

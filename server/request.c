@@ -46,7 +46,7 @@
 #define R_MAX 1e6
 #define PTR_LEN 96 /* room for every pointer built from known names */
 
-static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax", "fixed_vmax",
+static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax",  "fixed_vmax",
                                             "samples", "seed",   "material", "units", NULL};
 static const char *const contact_fields[] = {"R", NULL};
 static const char *const material_fields[] = {"E_star", "E1",     "nu1",     "E2",

@@ -215,8 +215,9 @@ static void test_no_checkerboard(void **state)
 }
 
 /* fixed_vmax: the answer is the level at vmax itself (as ljgap__paper_pdf_at and
- * ljgap__paper_summary_at give it, up to the driver's placing of the lower grid end), and its error estimate 3|r(V) - r(V/2)| covers the actual
- * error against the PDE (an independent method, converged to 1e-7). */
+ * ljgap__paper_summary_at give it, up to the driver's placing of the lower grid end), and its
+ * error estimate 3|r(V) - r(V/2)| covers the actual error against the PDE (an independent
+ * method, converged to 1e-7). */
 static void test_fixed_vmax(void **state)
 {
     (void)state;
@@ -253,7 +254,8 @@ static void test_fixed_vmax(void **state)
                1.0 / vm[t], l1, a.phi_err, ds, a.sigma.err, w.n);
         assert_true(l1 <= a.phi_err && a.phi_err < 4 * l1);
         assert_true(ds <= a.sigma.err && a.sigma.err < 6 * ds);
-        assert_true(w.n >= 1 || (a.phi_err <= o.tol && a.sigma.err <= o.tol * fmax(1, fabs(a.sigma.value))));
+        assert_true(w.n >= 1 ||
+                    (a.phi_err <= o.tol && a.sigma.err <= o.tol * fmax(1, fabs(a.sigma.value))));
         ljgap_pdf_release(&a, 1);
         ljgap_pdf_release(&b, 1);
         ljgap_pdf_release(&c, 1);
@@ -274,7 +276,8 @@ static void test_fixed_vmax(void **state)
            "%.5f)\n",
            s.g_eq.value, s.g_eq.err, sp.g_eq.value, s.dgamma_eff.value, s.dgamma_eff.err,
            sp.dgamma_eff.value);
-    printf("  level alone (lower end not moved): g_eq %.6f dgamma %.6f\n", s1.g_eq.value, s1.dgamma_eff.value);
+    printf("  level alone (lower end not moved): g_eq %.6f dgamma %.6f\n", s1.g_eq.value,
+           s1.dgamma_eff.value);
     /* the driver also moves the lower grid end (tol 1e-6): a small change beside the error */
     assert_true(fabs(s.g_eq.value - s1.g_eq.value) < 0.05 * s.g_eq.err);
     assert_true(fabs(s.dgamma_eff.value - s1.dgamma_eff.value) < 0.05 * s.dgamma_eff.err);

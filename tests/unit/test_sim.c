@@ -337,9 +337,9 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(variance),   cmocka_unit_test(residual_met),
         cmocka_unit_test(flat_is_lj), cmocka_unit_test(small_roughness_vs_theory),
-        cmocka_unit_test(seeds),
-        cmocka_unit_test(one_realization_warns),      cmocka_unit_test(hysteresis),
-        cmocka_unit_test(control),    cmocka_unit_test(bad_inputs),
+        cmocka_unit_test(seeds),      cmocka_unit_test(one_realization_warns),
+        cmocka_unit_test(hysteresis), cmocka_unit_test(control),
+        cmocka_unit_test(bad_inputs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
