@@ -105,11 +105,12 @@ void ljgap_handler_set_limits(const ljgap_limits *l)
 
 /* One computation: the validated request and the answer being built. */
 typedef struct {
-    ljgap_request rq;      /* what was asked; rq.warn collects every warning */
-    cJSON *ans;            /* the answer object */
-    double deadline;       /* ljgap_now() value when the time cap runs out */
-    int oom;               /* an allocation failed while building ans */
-    char fail[DETAIL_LEN]; /* extra detail for a failed status, "" or starting with a space */
+    ljgap_request rq;           /* what was asked; rq.warn collects every warning */
+    cJSON *ans;                 /* the answer object */
+    double deadline;            /* ljgap_now() value when the time cap runs out */
+    const volatile int *cancel; /* the call's cancel flag (or the limits' one) */
+    int oom;                    /* an allocation failed while building ans */
+    char fail[DETAIL_LEN];      /* extra detail for a failed status, "" or starting with a space */
 } job;
 
 /* ---- replies ---- */
@@ -291,7 +292,7 @@ static int opts_now(job *j, ljgap_opts *o)
 {
     *o = j->rq.opts;
     o->max_seconds = j->deadline - ljgap_now();
-    o->cancel = limits.cancel;
+    o->cancel = j->cancel;
     if (o->max_seconds > 0) return LJGAP_OK;
     snprintf(j->fail, sizeof j->fail, " (the request's time budget ran out before this step)");
     return LJGAP_ECAP;
@@ -715,6 +716,12 @@ end:
 
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
 {
+    ljgap_handle_call(endpoint, body, len, NULL, out);
+}
+
+void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
+                       ljgap_reply *out)
+{
     double t0 = ljgap_now();
     const route *r = route_find(endpoint);
     job j;
@@ -734,6 +741,7 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
     }
     if (!validate(r->ep, body, len, &j, out)) goto end;
     j.deadline = t0 + limits.max_seconds;
+    j.cancel = call && call->cancel ? call->cancel : limits.cancel;
     if (!(j.ans = cJSON_CreateObject())) {
         reply_oom(out);
         goto end;

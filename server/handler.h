@@ -34,6 +34,16 @@ void ljgap_handler_set_limits(const ljgap_limits *l);
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
+
+/* How one call is driven, beyond the server-wide limits. Everything may be zero. */
+typedef struct {
+    const volatile int *cancel; /* nonzero stops this computation (503 "unavailable" problem);
+                                 * NULL: the limits' cancel flag */
+} ljgap_call;
+
+/* ljgap_handle with per-call settings (call may be NULL: the same as ljgap_handle). */
+void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
+                       ljgap_reply *out);
 void ljgap_reply_free(ljgap_reply *r);
 
 /* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
