@@ -157,6 +157,14 @@ static int stop_status(const ljgap_opts *o, double deadline)
     return (o->cancel && *o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
 }
 
+/* A cancel check every MC_CANCEL_EVERY paths (path i of a loop): a request whose client went
+ * away stops within milliseconds, whatever the number of paths per batch. */
+#define MC_CANCEL_EVERY 256
+static int cancelled_now(const ljgap_opts *o, long i)
+{
+    return (i % MC_CANCEL_EVERY) == MC_CANCEL_EVERY - 1 && o->cancel && *o->cancel;
+}
+
 /* ---- traction ---- */
 
 int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, const double *g_ave,
@@ -183,8 +191,13 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
     double tp = ljgap_now(), Gend;
     gsl_rng_set(master, mix64(o->seed ^ 0x5bd1e995ULL));
     for (size_t p = 0; p < np; p++)
-        for (long i = 0; i < Bp; i++)
+        for (long i = 0; i < Bp; i++) {
+            if (cancelled_now(o, i)) {
+                st = LJGAP_ECANCEL;
+                goto end;
+            }
             mc_path(&m, gsl_rng_get(master), g[p], &kfull, 1, &Gend);
+        }
     double per_path = (ljgap_now() - tp) / (double)(Bp * (long)np);
     double steps_pp = (double)m.steps / (double)(Bp * (long)np);
     double left = deadline - ljgap_now();
@@ -213,6 +226,10 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
             gsl_rng_set(master, mix64(o->seed * MC_NB + (unsigned long)b));
             double a = 0.0;
             for (long i = 0; i < B; i++) {
+                if (cancelled_now(o, i)) {
+                    st = LJGAP_ECANCEL;
+                    goto end;
+                }
                 mc_path(&m, gsl_rng_get(master), g[p], &kfull, 1, &Gend);
                 a += ljgap_sigma(Gend);
                 s2[p] += ljgap_sigma(Gend) * ljgap_sigma(Gend);
