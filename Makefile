@@ -49,16 +49,22 @@ CFLAGS ?= $(OPT) -g
 WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
         -Wno-unused-parameter
 ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore \
+              -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
 LDLIBS := $(PKG_LIBS) -lpthread -lm
 ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)
 
 CORE_SRC := $(wildcard core/*.c)
-SERVER_SRC := $(filter-out server/cli.c server/ljgapd.c,$(wildcard server/*.c))
+SERVER_SRC := $(filter-out server/cli.c,$(wildcard server/*.c))
+# The daemon's own files (server/ljgapd/): all but main.c also go into an archive that the unit
+# tests link (the scheduler and the connection records are tested without HTTP).
+DAEMON_SRC := $(filter-out server/ljgapd/main.c,$(wildcard server/ljgapd/*.c))
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/%.o)
 SERVER_OBJ := $(SERVER_SRC:%.c=$(BUILD)/%.o)
+DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
 LIBCORE := $(BUILD)/libljgap.a
 LIBSERVER := $(BUILD)/libljgap_server.a
+LIBDAEMON := $(BUILD)/libljgapd.a
 
 UNIT_SRC := $(wildcard tests/unit/*.c)
 UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
@@ -81,11 +87,15 @@ $(LIBCORE): $(CORE_OBJ)
 $(LIBSERVER): $(SERVER_OBJ)
 	$(Q)$(AR) rcs $@ $^
 
+$(LIBDAEMON): $(DAEMON_OBJ)
+	$(Q)$(AR) rcs $@ $^
+
 $(BUILD)/ljgap: $(BUILD)/server/cli.o $(LIBSERVER) $(LIBCORE)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
-$(BUILD)/ljgapd: $(BUILD)/server/ljgapd.o $(BUILD)/gen/openapi.o $(LIBSERVER) $(LIBCORE)
+$(BUILD)/ljgapd: $(BUILD)/server/ljgapd/main.o $(BUILD)/gen/openapi.o $(LIBDAEMON) $(LIBSERVER) \
+                 $(LIBCORE)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -101,7 +111,7 @@ $(BUILD)/gen/openapi.c: server/openapi.json
 $(BUILD)/gen/openapi.o: $(BUILD)/gen/openapi.c
 	$(Q)$(CC) $(ALL_CFLAGS) -c $< -o $@
 
-$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBSERVER) $(LIBCORE)
+$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBDAEMON) $(LIBSERVER) $(LIBCORE)
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
@@ -141,7 +151,8 @@ bench: check-deps
 	@BUILD=$(BUILD) bench/run.sh
 
 format:
-	clang-format -i include/*.h core/*.c server/*.c server/*.h tests/unit/*.c bench/*.c
+	clang-format -i include/*.h core/*.c server/*.c server/*.h server/ljgapd/*.[ch] \
+	  tests/unit/*.c bench/*.c
 
 clean:
 	rm -rf build

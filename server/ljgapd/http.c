@@ -1,0 +1,237 @@
+/* http.c -- libmicrohttpd's callbacks: connections, a request's life cycle, bodies, the log.
+ *
+ * libmicrohttpd runs with epoll on --io-threads threads and calls these functions there, so
+ * none of them may block: anything slow is handed to a pool (work.c) while the connection is
+ * suspended.
+ *
+ *   - connections: on_connection records each one (conns.h: the slow-sender bound, TCP
+ *     keep-alive) and drops the record when libmicrohttpd closes it.
+ *   - the client: the remote address, or with --trust-proxy the last address in
+ *     X-Forwarded-For (the one our proxy appended; earlier ones are the client's word). Slots
+ *     are shared fairly between clients (pool.h). Without --trust-proxy, libmicrohttpd limits
+ *     each address to --client-connections connections; with it, every connection comes from
+ *     the proxy, so each forwarded client may have --client-connections requests in progress
+ *     and the next is answered 503.
+ *   - bodies: body routes must say Content-Type: application/json (else 415) and carry at most
+ *     --max-body bytes (413, decided from Content-Length before reading, or while reading a
+ *     chunked body, when the buffer would grow past the limit).
+ *   - the log: one line per request on stderr when libmicrohttpd reports it complete: method,
+ *     path, status, milliseconds, request id, and notes (time waited for a slot, a client that
+ *     went away). X-Request-Id is echoed when the client sends a sane one,
+ *     otherwise made up, and is returned on every answer.
+ */
+#include "daemon.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DISCARD_FACTOR 16 /* close a connection sending more than this times the body limit */
+
+/* Copy s into dst (size dstsz), replacing bytes outside printable ASCII with '?'. */
+static void copy_printable(char *dst, size_t dstsz, const char *s)
+{
+    size_t i = 0;
+    for (; s[i] && i + 1 < dstsz; i++)
+        dst[i] = (s[i] > ' ' && s[i] < 0x7f) ? s[i] : '?';
+    dst[i] = '\0';
+}
+
+/* The numeric address of sa into out ("?" if there is none). */
+static void address_of(const struct sockaddr *sa, char *out, size_t n)
+{
+    const void *a = NULL;
+    if (sa && sa->sa_family == AF_INET) a = &((const struct sockaddr_in *)sa)->sin_addr;
+    if (sa && sa->sa_family == AF_INET6) a = &((const struct sockaddr_in6 *)sa)->sin6_addr;
+    if (!a || !inet_ntop(sa->sa_family, a, out, (socklen_t)n)) snprintf(out, n, "?");
+}
+
+/* The last comma-separated entry of an X-Forwarded-For value, if it is an IP address. */
+static int forwarded_for(const char *xff, char *out, size_t n)
+{
+    const char *last = strrchr(xff, ',');
+    char tok[POOL_CLIENT_MAX];
+    unsigned char buf[sizeof(struct in6_addr)];
+    size_t len;
+
+    last = last ? last + 1 : xff;
+    last += strspn(last, " \t");
+    len = strcspn(last, " \t");
+    if (len == 0 || len >= sizeof tok) return 0;
+    memcpy(tok, last, len);
+    tok[len] = '\0';
+    if (inet_pton(AF_INET, tok, buf) != 1 && inet_pton(AF_INET6, tok, buf) != 1) return 0;
+    snprintf(out, n, "%s", tok);
+    return 1;
+}
+
+static void client_of(struct MHD_Connection *c, char *out, size_t n)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    if (srv.cfg.trust_proxy) {
+        const char *xff = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Forwarded-For");
+        if (xff && forwarded_for(xff, out, n)) return;
+    }
+    address_of(ci ? ci->client_addr : NULL, out, n);
+}
+
+static request *request_new(struct MHD_Connection *c, const char *url, const char *method)
+{
+    const char *rid = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Request-Id");
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    request *r = calloc(1, sizeof *r);
+
+    if (!r) return NULL;
+    clock_gettime(CLOCK_MONOTONIC, &r->t0);
+    r->conn = c;
+    r->rec = ci ? ci->socket_context : NULL;
+    r->url = url;
+    copy_printable(r->method, sizeof r->method, method);
+    copy_printable(r->path, sizeof r->path, url);
+    client_of(c, r->client, sizeof r->client);
+    if (rid && rid[0] && strlen(rid) <= REQUEST_ID_MAX &&
+        strspn(rid, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._:-") ==
+            strlen(rid))
+        strcpy(r->id, rid);
+    else
+        snprintf(r->id, sizeof r->id, "%08x%08lx", srv.id_seed,
+                 (unsigned long)atomic_fetch_add(&srv.id_counter, 1) + 1);
+    return r;
+}
+
+/* The first call of a request: route it and refuse what can be refused before any body. */
+static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const char *method)
+{
+    const char *clen, *ctype;
+    unsigned long long want = 0;
+    char detail[120];
+
+    if (srv.cfg.trust_proxy) {
+        if (!conns_client_enter(srv.conns, r->client, srv.cfg.client_connections)) {
+            snprintf(detail, sizeof detail,
+                     "this client already has %u requests in progress (--client-connections); "
+                     "retry after the given seconds",
+                     srv.cfg.client_connections);
+            return respond_busy(c, r, detail, 1);
+        }
+        r->counted = 1;
+    }
+    r->route = route_find(r->url);
+    if (!r->route->path) return r->route->answer(c, r);
+    if (!method_allowed(r->route->allow, method)) {
+        snprintf(detail, sizeof detail, "use %s", r->route->allow);
+        return respond_problem(c, r, MHD_HTTP_METHOD_NOT_ALLOWED, detail, MHD_HTTP_HEADER_ALLOW,
+                               r->route->allow);
+    }
+    if (!r->route->takes_body) return r->route->answer(c, r);
+
+    clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    if (clen) want = strtoull(clen, NULL, 10);
+    if (want > srv.cfg.max_body) return respond_too_large(c, r);
+    ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (!is_json_type(ctype))
+        return respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE,
+                               "send the request as Content-Type: application/json", NULL, NULL);
+    conns_receiving(srv.conns, r->rec);
+    if (want) {
+        r->body = malloc(want + 1);
+        if (!r->body) return MHD_NO;
+        r->cap = want + 1;
+    }
+    return MHD_YES;
+}
+
+/* Append a chunk of body. A body that outgrows cfg.max_body is freed and the rest counted
+ * and dropped (libmicrohttpd 0.9.75 cannot queue an answer while a body is arriving, so the
+ * 413 goes out when the body ends); -1 (close the connection) if memory runs out or the client
+ * goes on sending past DISCARD_FACTOR times the limit. */
+static int request_take(request *r, const char *data, size_t n)
+{
+    size_t limit = srv.cfg.max_body;
+    if (!r->too_large && !r->status && r->len + n > limit) {
+        r->too_large = 1;
+        free(r->body);
+        r->body = NULL;
+        r->discarded = r->len;
+        r->len = r->cap = 0;
+    }
+    if (r->too_large || r->status) {
+        r->discarded += n;
+        return r->discarded > DISCARD_FACTOR * limit ? -1 : 0;
+    }
+    if (r->len + n + 1 > r->cap) {
+        size_t cap = r->cap ? r->cap : 4096;
+        char *b;
+        while (cap < r->len + n + 1)
+            cap *= 2;
+        if (cap > limit + 1) cap = limit + 1;
+        b = realloc(r->body, cap);
+        if (!b) return -1;
+        r->body = b;
+        r->cap = cap;
+    }
+    memcpy(r->body + r->len, data, n);
+    r->len += n;
+    r->body[r->len] = '\0';
+    return 0;
+}
+
+enum MHD_Result ljgapd_on_access(void *cls, struct MHD_Connection *c, const char *url,
+                                 const char *method, const char *version, const char *upload_data,
+                                 size_t *upload_data_size, void **con_cls)
+{
+    request *r = *con_cls;
+
+    if (!r) {
+        r = request_new(c, url, method);
+        if (!r) return MHD_NO;
+        *con_cls = r;
+        atomic_fetch_add(&srv.inflight, 1);
+        return request_begin(c, r, method);
+    }
+    r->url = url; /* the same string on every call; kept current to be safe */
+    if (*upload_data_size) {
+        size_t n = *upload_data_size;
+        *upload_data_size = 0;
+        return request_take(r, upload_data, n) == 0 ? MHD_YES : MHD_NO;
+    }
+    if (r->status) return MHD_YES;
+    conns_busy(srv.conns, r->rec);
+    if (r->too_large) return respond_too_large(c, r);
+    return r->route->answer(c, r);
+}
+
+void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
+                         enum MHD_RequestTerminationCode toe)
+{
+    request *r = *con_cls;
+
+    if (!r) return;
+    fprintf(stderr, "%s %s %d %.1fms id=%s%s%s\n", r->method, r->path, r->status,
+            1e3 * seconds_since(&r->t0), r->id, r->note,
+            toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "" : " (connection closed early)");
+    conns_idle(srv.conns, r->rec);
+    if (r->counted) conns_client_leave(srv.conns, r->client);
+    work_release(r);
+    free(r->body);
+    free(r);
+    *con_cls = NULL;
+    atomic_fetch_sub(&srv.inflight, 1);
+}
+
+void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_context,
+                          enum MHD_ConnectionNotificationCode toe)
+{
+    if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+        *socket_context = ci ? conns_open(srv.conns, ci->connect_fd) : NULL;
+    } else {
+        conns_close(srv.conns, *socket_context);
+        *socket_context = NULL;
+    }
+}

@@ -1,0 +1,235 @@
+/* main.c -- ljgapd, the ljgap HTTP daemon: start-up and shutdown.
+ *
+ * The daemon is a thin shell over the request handler (handler.h): everything that knows
+ * physics or JSON fields lives there, and the daemon only moves bytes between sockets and that
+ * pure function, with what a server shared by a lab needs around it (daemon.h lists the files):
+ *
+ *   - connections cost no thread: libmicrohttpd runs --io-threads event loops (epoll), and a
+ *     request that waits for a compute slot or computes is suspended, holding no thread. The
+ *     connection limit (--connections, default 1024) is fitted to the open-file limit, whose
+ *     soft value is raised to the hard one; each client may hold --client-connections.
+ *   - compute slots (--compute-slots, default the cores) with a bounded, fair wait queue
+ *     (--queue, --queue-wait): a request past those limits gets 503 with Retry-After; a
+ *     request whose client hangs up leaves the queue, or has its computation cancelled.
+ *   - a cache of identical requests' answers, served without a slot; /healthz, /version,
+ *     /openapi.json and the page's files never wait.
+ *   - simulation jobs run in the background (jobs.h).
+ *   - shutdown: SIGINT/SIGTERM are taken by sigwait() here. The daemon stops accepting
+ *     (MHD_quiesce_daemon); requests waiting for a slot get 503; computations may finish for a
+ *     grace period, then their cancel flags are raised; everything has stopped within 10 s, and
+ *     it exits 0.
+ */
+#include "daemon.h"
+#include "ljgap.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <fftw3.h>
+#include <gsl/gsl_errno.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#define FD_RESERVE 64 /* descriptors kept free of connections: files, the store, the listener */
+#define OPS_THREADS 2 /* threads for job-store calls */
+#define OPS_QUEUE 256 /* job-store calls waiting at most */
+
+ljgapd_server srv = {.web_fd = -1};
+
+/* Raises the soft open-file limit to the hard one and fits the connection limit inside it.
+ * Writes what it did into note. */
+static void fit_file_limit(char *note, size_t n)
+{
+    struct rlimit rl;
+    rlim_t was;
+    unsigned fit;
+
+    if (getrlimit(RLIMIT_NOFILE, &rl) != 0) {
+        snprintf(note, n, "open-file limit unknown");
+        return;
+    }
+    was = rl.rlim_cur;
+    if (rl.rlim_cur < rl.rlim_max) {
+        rl.rlim_cur = rl.rlim_max;
+        if (setrlimit(RLIMIT_NOFILE, &rl) != 0) rl.rlim_cur = was;
+    }
+    fit = rl.rlim_cur > FD_RESERVE + 4
+              ? (unsigned)(rl.rlim_cur - FD_RESERVE > 1000000 ? 1000000 : rl.rlim_cur - FD_RESERVE)
+              : 4;
+    if (srv.cfg.connections > fit) srv.cfg.connections = fit;
+    if (rl.rlim_cur == was)
+        snprintf(note, n, "open-file limit %llu", (unsigned long long)rl.rlim_cur);
+    else
+        snprintf(note, n, "open-file limit %llu (raised from %llu)",
+                 (unsigned long long)rl.rlim_cur, (unsigned long long)was);
+}
+
+static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
+{
+    struct sockaddr_in in4 = {0};
+    struct sockaddr_in6 in6 = {0};
+    struct sockaddr *sa = NULL;
+    unsigned flags =
+        MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ITC | MHD_USE_ERROR_LOG;
+    /* Without --trust-proxy the remote address is the client, and libmicrohttpd refuses its
+     * connections past the limit at accept; behind a proxy every connection is the proxy's. */
+    unsigned per_ip = srv.cfg.trust_proxy ? 0 : srv.cfg.client_connections;
+    struct MHD_Daemon *d;
+    const union MHD_DaemonInfo *info;
+
+    if (inet_pton(AF_INET, srv.cfg.bind, &in4.sin_addr) == 1) {
+        in4.sin_family = AF_INET;
+        in4.sin_port = htons((uint16_t)srv.cfg.port);
+        sa = (struct sockaddr *)&in4;
+        snprintf(host, hostsz, "%s",
+                 in4.sin_addr.s_addr == htonl(INADDR_ANY) ? "127.0.0.1" : srv.cfg.bind);
+    } else if (inet_pton(AF_INET6, srv.cfg.bind, &in6.sin6_addr) == 1) {
+        in6.sin6_family = AF_INET6;
+        in6.sin6_port = htons((uint16_t)srv.cfg.port);
+        sa = (struct sockaddr *)&in6;
+        flags |= MHD_USE_IPv6;
+        if (IN6_IS_ADDR_UNSPECIFIED(&in6.sin6_addr))
+            snprintf(host, hostsz, "[::1]");
+        else
+            snprintf(host, hostsz, "[%s]", srv.cfg.bind);
+    } else {
+        fprintf(stderr, "ljgapd: --bind wants a numeric IPv4 or IPv6 address, not '%s'\n",
+                srv.cfg.bind);
+        return NULL;
+    }
+    struct MHD_OptionItem opts[] = {
+        {MHD_OPTION_SOCK_ADDR, 0, sa},
+        {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)srv.cfg.connections, NULL},
+        {MHD_OPTION_PER_IP_CONNECTION_LIMIT, (intptr_t)per_ip, NULL},
+        {MHD_OPTION_CONNECTION_TIMEOUT, (intptr_t)srv.cfg.idle_s, NULL},
+        {MHD_OPTION_NOTIFY_COMPLETED, (intptr_t)ljgapd_on_completed, NULL},
+        {MHD_OPTION_NOTIFY_CONNECTION, (intptr_t)ljgapd_on_connection, NULL},
+        /* last, so that one I/O thread (no pool) simply ends the list here */
+        {srv.cfg.io_threads > 1 ? MHD_OPTION_THREAD_POOL_SIZE : MHD_OPTION_END,
+         (intptr_t)srv.cfg.io_threads, NULL},
+        {MHD_OPTION_END, 0, NULL},
+    };
+    d = MHD_start_daemon(flags, (uint16_t)srv.cfg.port, NULL, NULL, ljgapd_on_access, NULL,
+                         MHD_OPTION_ARRAY, opts, MHD_OPTION_END);
+    if (!d) {
+        fprintf(stderr, "ljgapd: cannot listen on %s port %u\n", srv.cfg.bind, srv.cfg.port);
+        return NULL;
+    }
+    info = MHD_get_daemon_info(d, MHD_DAEMON_INFO_BIND_PORT);
+    if (info) srv.cfg.port = info->port;
+    return d;
+}
+
+/* Wait until no request is in flight or `until` seconds have passed since t0. */
+static void wait_inflight(const struct timespec *t0, double until)
+{
+    const struct timespec tick = {0, 20 * 1000 * 1000};
+    while (atomic_load(&srv.inflight) > 0 && seconds_since(t0) < until)
+        nanosleep(&tick, NULL);
+}
+
+int main(int argc, char **argv)
+{
+    struct MHD_Daemon *d = NULL;
+    ljgap_limits limits;
+    sigset_t sigs;
+    char host[INET6_ADDRSTRLEN + 3], files[96];
+    struct timespec t_sig;
+    MHD_socket lfd;
+    ljgapd_config *cfg = &srv.cfg;
+    pool_config slots_cfg, ops_cfg;
+    int sig = 0, rc;
+
+    gsl_set_error_handler_off();
+    rc = ljgapd_parse_args(cfg, argc, argv);
+    if (rc != 0) return rc < 0 ? 2 : 0;
+    rc = 1;
+
+    /* Signals go to main's sigwait only: block them before any thread starts. */
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGINT);
+    sigaddset(&sigs, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    ljgap_limits_default(&limits);
+    limits.max_seconds = cfg->max_seconds;
+    ljgap_handler_set_limits(&limits);
+    if (getrandom(&srv.id_seed, sizeof srv.id_seed, 0) != sizeof srv.id_seed)
+        srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
+    fit_file_limit(files, sizeof files);
+
+    slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait};
+    ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait};
+    srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
+    srv.jobs = ljgap_jobs_alloc(&cfg->jobs);
+    srv.slots = pool_start(&slots_cfg);
+    srv.ops = pool_start(&ops_cfg);
+    srv.conns = conns_start(cfg->receive_s);
+    if (!srv.cache || !srv.jobs || !srv.slots || !srv.ops || !srv.conns) {
+        fprintf(stderr, "ljgapd: out of memory or threads\n");
+        goto end;
+    }
+    if (cfg->web) {
+        srv.web_fd = open(cfg->web, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (srv.web_fd < 0) {
+            fprintf(stderr, "ljgapd: cannot open --web %s: %s\n", cfg->web, strerror(errno));
+            goto end;
+        }
+    }
+    d = daemon_start(host, sizeof host);
+    if (!d) goto end;
+    printf("listening on http://%s:%u/\n", host, cfg->port);
+    fflush(stdout);
+    fprintf(stderr,
+            "ljgapd %s: %u compute slots (queue %u, wait %g s, cap %g s each), %u connections "
+            "(%u per client%s), %s, %u I/O thread%s, %u job workers, web %s\n",
+            LJGAP_VERSION, cfg->slots, cfg->queue, cfg->queue_wait, cfg->max_seconds,
+            cfg->connections, cfg->client_connections,
+            cfg->trust_proxy ? ", by X-Forwarded-For" : "", files, cfg->io_threads,
+            cfg->io_threads == 1 ? "" : "s", cfg->jobs.workers, cfg->web ? cfg->web : "(none)");
+
+    while (sigwait(&sigs, &sig) != 0)
+        ;
+    clock_gettime(CLOCK_MONOTONIC, &t_sig);
+    atomic_store(&srv.stopping, 1);
+    fprintf(stderr, "ljgapd: %s, stopping (%u requests in flight)\n", strsignal(sig),
+            atomic_load(&srv.inflight));
+    lfd = MHD_quiesce_daemon(d);
+    ljgap_jobs_shutdown(srv.jobs); /* background jobs have no client waiting: cancel them now */
+    /* Waiting requests get 503 now; computations may finish for grace_s, then are cancelled.
+     * Every suspended connection must be resumed before MHD_stop_daemon. */
+    if (!pool_stop(srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
+        !pool_stop(srv.ops, 0, cfg->stop_s - seconds_since(&t_sig))) {
+        fprintf(stderr, "ljgapd: a computation ignored its cancel flag; exiting without it\n");
+        _exit(0);
+    }
+    wait_inflight(&t_sig, cfg->stop_s);
+    if (atomic_load(&srv.inflight) > 0)
+        fprintf(stderr, "ljgapd: %u requests did not finish; closing their connections\n",
+                atomic_load(&srv.inflight));
+    if (!ljgap_jobs_wait_idle(srv.jobs, cfg->stop_s - seconds_since(&t_sig))) {
+        fprintf(stderr, "ljgapd: a simulation ignored its cancel flag; exiting without it\n");
+        _exit(0);
+    }
+    MHD_stop_daemon(d);
+    if (lfd != MHD_INVALID_SOCKET) close(lfd);
+    fprintf(stderr, "ljgapd: stopped after %.1f s\n", seconds_since(&t_sig));
+    rc = 0;
+end:
+    if (srv.web_fd >= 0) close(srv.web_fd);
+    pool_free(srv.slots);
+    pool_free(srv.ops);
+    conns_free(srv.conns);
+    ljgap_jobs_free(srv.jobs);
+    fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
+    http_cache_free(srv.cache);
+    return rc;
+}

@@ -1,0 +1,131 @@
+/* reply.c -- the only code in ljgapd that creates responses.
+ *
+ * Every answer goes through respond(), which adds the common headers (Content-Type,
+ * X-Request-Id, nosniff, the page's Content-Security-Policy, Connection: close while stopping)
+ * and queues it. Routes answer through respond_json, respond_reply, respond_problem,
+ * respond_busy and respond_file; none builds a response by hand. Problems written here are the
+ * HTTP-level ones (404, 405, 413, 415, 503, 500); the handler writes its own (400, 404, 422)
+ * with the same base URI, and openapi.json lists them all.
+ */
+#include "daemon.h"
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#define PROBLEM_BASE "https://ljgap.example/problems/" /* as in handler.c */
+
+double seconds_since(const struct timespec *t0)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)(t.tv_sec - t0->tv_sec) + 1e-9 * (double)(t.tv_nsec - t0->tv_nsec);
+}
+
+/* Adds the common headers, queues resp and records the status. Takes ownership of resp. */
+static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
+                               struct MHD_Response *resp, const char *ctype)
+{
+    enum MHD_Result ret;
+
+    if (!resp) return MHD_NO; /* out of memory: drop the connection, nothing else can be sent */
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
+    MHD_add_response_header(resp, "X-Request-Id", r->id);
+    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+    /* The page loads nothing from elsewhere and runs no inline code. */
+    MHD_add_response_header(resp, "Content-Security-Policy", "default-src 'self'");
+    if (atomic_load(&srv.stopping))
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
+    ret = MHD_queue_response(c, (unsigned)status, resp);
+    MHD_destroy_response(resp);
+    if (ret == MHD_YES) r->status = status;
+    return ret;
+}
+
+enum MHD_Result respond_json_hdr(struct MHD_Connection *c, request *r, int status,
+                                 const char *ctype, const char *body, size_t len,
+                                 const char *header, const char *value)
+{
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer(len, (void *)body, MHD_RESPMEM_MUST_COPY);
+    if (resp && header) MHD_add_response_header(resp, header, value);
+    return respond(c, r, status, resp, ctype);
+}
+
+enum MHD_Result respond_json(struct MHD_Connection *c, request *r, int status, const char *ctype,
+                             const char *body, size_t len)
+{
+    return respond_json_hdr(c, r, status, ctype, body, len, NULL, NULL);
+}
+
+enum MHD_Result respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep)
+{
+    enum MHD_Result ret = respond_json(c, r, rep->status, rep->content_type, rep->body, rep->len);
+    ljgap_reply_free(rep);
+    return ret;
+}
+
+/* Problem types of the answers written here. */
+static const char *problem_type(int status)
+{
+    switch (status) {
+    case MHD_HTTP_NOT_FOUND:
+        return PROBLEM_BASE "not-found";
+    case MHD_HTTP_METHOD_NOT_ALLOWED:
+        return PROBLEM_BASE "method-not-allowed";
+    case MHD_HTTP_CONTENT_TOO_LARGE:
+        return PROBLEM_BASE "content-too-large";
+    case MHD_HTTP_UNSUPPORTED_MEDIA_TYPE:
+        return PROBLEM_BASE "unsupported-media-type";
+    case MHD_HTTP_SERVICE_UNAVAILABLE:
+        return PROBLEM_BASE "busy";
+    default:
+        return PROBLEM_BASE "out-of-memory";
+    }
+}
+
+enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status,
+                                const char *detail, const char *header, const char *value)
+{
+    const char *title = MHD_get_reason_phrase_for((unsigned)status);
+    cJSON *p = cJSON_CreateObject();
+    char *text = NULL;
+    struct MHD_Response *resp = NULL;
+
+    if (p && cJSON_AddStringToObject(p, "type", problem_type(status)) &&
+        cJSON_AddStringToObject(p, "title", title) &&
+        cJSON_AddNumberToObject(p, "status", status) &&
+        cJSON_AddStringToObject(p, "detail", detail) &&
+        cJSON_AddStringToObject(p, "instance", r->path) && cJSON_AddArrayToObject(p, "errors"))
+        text = cJSON_PrintUnformatted(p);
+    cJSON_Delete(p);
+    if (text) resp = MHD_create_response_from_buffer(strlen(text), text, MHD_RESPMEM_MUST_COPY);
+    cJSON_free(text);
+    if (resp && header) MHD_add_response_header(resp, header, value);
+    return respond(c, r, status, resp, "application/problem+json");
+}
+
+enum MHD_Result respond_busy(struct MHD_Connection *c, request *r, const char *detail,
+                             unsigned seconds)
+{
+    char retry[16];
+    snprintf(retry, sizeof retry, "%u", seconds);
+    return respond_problem(c, r, MHD_HTTP_SERVICE_UNAVAILABLE, detail, MHD_HTTP_HEADER_RETRY_AFTER,
+                           retry);
+}
+
+enum MHD_Result respond_file(struct MHD_Connection *c, request *r, int fd, size_t size,
+                             const char *ctype)
+{
+    struct MHD_Response *resp = MHD_create_response_from_fd(size, fd);
+    if (!resp) close(fd);
+    return respond(c, r, MHD_HTTP_OK, resp, ctype);
+}
+
+enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r)
+{
+    char detail[64];
+    snprintf(detail, sizeof detail, "the request body is limited to %zu bytes", srv.cfg.max_body);
+    return respond_problem(c, r, MHD_HTTP_CONTENT_TOO_LARGE, detail, NULL, NULL);
+}

@@ -1,0 +1,227 @@
+/* routes.c -- the route table and the routes that are not computations or files.
+ *
+ * One flat table, first match wins, the last row answers 404. A row names its path (exact, or
+ * a prefix ending in '/' with a predicate saying whether the rest exists), the methods it
+ * allows (anything else is 405 with Allow), whether it reads a JSON body, and the function
+ * that answers. /healthz, /version and /openapi.json answer on the I/O thread at once: they
+ * never wait for anything. The simulation job routes call the job store, which may wait (a
+ * lock, a disk, a DELETE waiting for a job to stop), so they run on srv.ops (work.c).
+ *
+ * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and queues
+ * a numerical-model run in the job store (jobs.h: --job-workers threads, a queue of
+ * --job-queue, 503 with Retry-After when full); 202 gives the job's id and its Location.
+ * GET /v1/simulations/ID polls it (status, progress, then result or problem), DELETE cancels
+ * it (200 once it has ended, 202 while it is still stopping).
+ */
+#include "daemon.h"
+#include "ljgap.h"
+
+#include <cjson/cJSON.h>
+#include <gsl/gsl_version.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* The OpenAPI document, server/openapi.json embedded by the Makefile ($(BUILD)/gen/openapi.c). */
+extern const char ljgapd_openapi[];
+extern const size_t ljgapd_openapi_len;
+
+static enum MHD_Result route_healthz(struct MHD_Connection *c, request *r)
+{
+    static const char ok[] = "{\"status\":\"pass\"}";
+    return respond_json(c, r, MHD_HTTP_OK, "application/health+json", ok, sizeof ok - 1);
+}
+
+static enum MHD_Result route_version(struct MHD_Connection *c, request *r)
+{
+    cJSON *v = cJSON_CreateObject();
+    cJSON *libs = NULL;
+    char *text = NULL;
+    enum MHD_Result ret;
+
+    if (v && cJSON_AddStringToObject(v, "program", "ljgapd") &&
+        cJSON_AddStringToObject(v, "version", LJGAP_VERSION) &&
+        (libs = cJSON_AddObjectToObject(v, "libraries")) &&
+        cJSON_AddStringToObject(libs, "libmicrohttpd", MHD_get_version()) &&
+        cJSON_AddStringToObject(libs, "cjson", cJSON_Version()) &&
+        cJSON_AddStringToObject(libs, "gsl", gsl_version))
+        text = cJSON_PrintUnformatted(v);
+    cJSON_Delete(v);
+    if (!text)
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    ret = respond_json(c, r, MHD_HTTP_OK, "application/json", text, strlen(text));
+    cJSON_free(text);
+    return ret;
+}
+
+static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
+{
+    return respond_json(c, r, MHD_HTTP_OK, "application/json", ljgapd_openapi, ljgapd_openapi_len);
+}
+
+/* ---- simulation jobs (on srv.ops) ---- */
+
+#define SIM_PATH "/v1/simulations"
+
+static void sim_job_run(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out)
+{
+    ljgap_sim_control sc = {(double)srv.cfg.job_seconds, ctl->cancel, ctl->progress, ctl->ctx};
+    ljgap_sim_request_run(arg, &sc, out);
+}
+
+static void sim_job_free(void *arg)
+{
+    ljgap_sim_request_free(arg);
+}
+
+/* Moves a malloc'd JSON string into out as a 2xx answer. */
+static void work_json(work_reply *out, int status, char *json)
+{
+    out->rep.status = status;
+    out->rep.body = json;
+    out->rep.len = strlen(json);
+    out->rep.content_type = "application/json";
+}
+
+static void work_oom(work_reply *out)
+{
+    out->problem = MHD_HTTP_INTERNAL_SERVER_ERROR;
+    snprintf(out->detail, sizeof out->detail, "out of memory");
+}
+
+/* POST /v1/simulations: validate, queue, 202 with the job's status and its Location. */
+static void sim_submit_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    ljgap_sim_request *sr = ljgap_sim_request_parse(r->body ? r->body : "", r->len, &out->rep);
+    char id[LJGAP_JOB_ID_LEN + 1], *status = NULL;
+
+    if (!sr) return; /* out->rep holds the problem */
+    switch (ljgap_jobs_submit(srv.jobs, sim_job_run, sr, sim_job_free, id)) {
+    case LJGAP_JOBS_OK:
+        break;
+    case LJGAP_JOBS_FULL:
+        out->problem = MHD_HTTP_SERVICE_UNAVAILABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "the simulation queue is full (%u jobs waiting); retry after the given seconds",
+                 srv.cfg.jobs.queue_cap);
+        out->header = MHD_HTTP_HEADER_RETRY_AFTER;
+        snprintf(out->value, sizeof out->value, "%u", srv.cfg.job_retry);
+        return;
+    case LJGAP_JOBS_STOPPING:
+        out->problem = MHD_HTTP_SERVICE_UNAVAILABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "the server is shutting down and takes no new jobs");
+        out->header = MHD_HTTP_HEADER_RETRY_AFTER;
+        snprintf(out->value, sizeof out->value, "%u", srv.cfg.retry_after);
+        return;
+    default:
+        work_oom(out);
+        return;
+    }
+    /* a job just queued is not evicted (only finished ones are, and keep_done >= 1) */
+    if (ljgap_jobs_status(srv.jobs, id, &status) != LJGAP_JOBS_OK) {
+        work_oom(out);
+        return;
+    }
+    work_json(out, MHD_HTTP_ACCEPTED, status);
+    out->header = MHD_HTTP_HEADER_LOCATION;
+    snprintf(out->value, sizeof out->value, SIM_PATH "/%s", id);
+}
+
+static enum MHD_Result route_sim_submit(struct MHD_Connection *c, request *r)
+{
+    return route_offload(c, r, srv.ops, sim_submit_work, NULL, 0);
+}
+
+/* Any one path segment may name a job; unknown ones are answered 404. */
+static int sim_id_exists(const char *rest)
+{
+    return rest[0] && !strchr(rest, '/');
+}
+
+/* GET (or HEAD) /v1/simulations/ID: its status; DELETE: cancel it. */
+static void sim_job_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    const char *id = r->url + strlen(SIM_PATH "/");
+    char *status = NULL;
+    int final = 1, st;
+
+    if (strcmp(r->method, "DELETE") == 0)
+        st = ljgap_jobs_cancel(srv.jobs, id, srv.cfg.cancel_wait_s, &status, &final);
+    else
+        st = ljgap_jobs_status(srv.jobs, id, &status);
+    if (st == LJGAP_JOBS_UNKNOWN) {
+        out->problem = MHD_HTTP_NOT_FOUND;
+        snprintf(out->detail, sizeof out->detail,
+                 "no simulation job with this id: it never existed, or it finished more than "
+                 "%.0f s ago or before the last %u finished jobs",
+                 srv.cfg.jobs.keep_seconds, srv.cfg.jobs.keep_done);
+        return;
+    }
+    if (st != LJGAP_JOBS_OK) {
+        work_oom(out);
+        return;
+    }
+    work_json(out, final ? MHD_HTTP_OK : MHD_HTTP_ACCEPTED, status);
+}
+
+static enum MHD_Result route_sim_job(struct MHD_Connection *c, request *r)
+{
+    return route_offload(c, r, srv.ops, sim_job_work, NULL, 0);
+}
+
+static enum MHD_Result route_not_found(struct MHD_Connection *c, request *r)
+{
+    return respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such endpoint; see /openapi.json", NULL,
+                           NULL);
+}
+
+/* First match wins; the last row matches everything. */
+static const struct route routes[] = {
+    {"/healthz", NULL, "GET, HEAD", 0, route_healthz},
+    {"/version", NULL, "GET, HEAD", 0, route_version},
+    {"/openapi.json", NULL, "GET, HEAD", 0, route_openapi},
+    {SIM_PATH, NULL, "POST", 1, route_sim_submit},
+    {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job},
+    {"/v1/", compute_exists, "POST", 1, route_compute},
+    {"/", static_exists, "GET, HEAD", 0, route_static},
+    {NULL, NULL, NULL, 0, route_not_found},
+};
+
+const struct route *route_find(const char *url)
+{
+    const struct route *rt = routes;
+    for (; rt->path; rt++) {
+        size_t n = strlen(rt->path);
+        if (rt->path[n - 1] == '/') {
+            if (strncmp(url, rt->path, n) == 0 && rt->exists(url + n)) return rt;
+        } else if (strcmp(url, rt->path) == 0) {
+            return rt;
+        }
+    }
+    return rt;
+}
+
+int method_allowed(const char *allow, const char *method)
+{
+    size_t n = strlen(method);
+    for (const char *p = allow; *p;) {
+        size_t t = strcspn(p, ",");
+        if (t == n && strncmp(p, method, n) == 0) return 1;
+        p += t;
+        p += strspn(p, ", ");
+    }
+    return 0;
+}
+
+int is_json_type(const char *ct)
+{
+    size_t n;
+    if (!ct) return 0;
+    ct += strspn(ct, " \t");
+    n = strcspn(ct, "; \t");
+    if (n == 16 && strncasecmp(ct, "application/json", 16) == 0) return 1;
+    return n > 17 && strncasecmp(ct, "application/", 12) == 0 &&
+           strncasecmp(ct + n - 5, "+json", 5) == 0;
+}

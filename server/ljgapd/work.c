@@ -1,0 +1,213 @@
+/* work.c -- answering off the I/O thread: computations on compute slots, job-store calls on
+ * the store's threads, and the answer cache in front of the computations.
+ *
+ * libmicrohttpd runs every connection on its I/O thread(s) with epoll, so an access handler
+ * must never block. A route whose answer takes time hands a work function to a pool (pool.h):
+ *
+ *   1. route_offload() makes a task and submits it. The pool accepts it and, still under its
+ *      lock, parks it: MHD_suspend_connection(), so the connection holds no thread while it
+ *      waits or runs. A full pool answers 503 with Retry-After at once.
+ *   2. A pool thread runs the work function, which fills a work_reply (a body, or a problem to
+ *      write); a computation reads the task's cancel flag, which the pool raises when the
+ *      client hangs up (or at shutdown).
+ *   3. wake: MHD_resume_connection(). libmicrohttpd calls the route's access handler again on
+ *      its I/O thread, which finds the task ended and answers from it: the work's reply, 503
+ *      after waiting --queue-wait seconds, 503 while shutting down, or, when the client went
+ *      away, a 503 that nobody is likely to read (the log line says so).
+ *
+ * Responses are only ever queued from the I/O thread, inside the access handler; the pool's
+ * threads only call MHD_resume_connection, which libmicrohttpd allows from any thread.
+ */
+#include "daemon.h"
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct work_task {
+    pool_task t;    /* the pool's view (first member) */
+    request *r;     /* the request it answers (alive while the connection is suspended) */
+    work_fn fn;     /* the work */
+    work_reply out; /* what the work produced */
+};
+
+static void task_free(work_task *w)
+{
+    if (!w) return;
+    ljgap_reply_free(&w->out.rep);
+    free(w->out.key);
+    free(w);
+}
+
+void work_release(request *r)
+{
+    task_free(r->task);
+    r->task = NULL;
+}
+
+static void task_run(pool_task *t)
+{
+    work_task *w = (work_task *)t;
+    w->fn(w->r, &t->cancel, &w->out);
+}
+
+static void task_park(pool_task *t)
+{
+    MHD_suspend_connection(((work_task *)t)->r->conn);
+}
+
+static void task_wake(pool_task *t)
+{
+    MHD_resume_connection(((work_task *)t)->r->conn);
+}
+
+/* The access handler's second call, after the resume: answer from the ended task. */
+static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *p)
+{
+    work_task *w = r->task;
+    work_reply *o = &w->out;
+    enum MHD_Result ret = MHD_YES;
+    char detail[160];
+
+    if (w->t.waited_s >= 0.05) snprintf(r->note, sizeof r->note, " waited=%.2fs", w->t.waited_s);
+    switch (w->t.outcome) {
+    case POOL_DONE:
+        if (o->problem)
+            ret = respond_problem(c, r, o->problem, o->detail, o->header, o->value);
+        else if (!o->rep.body)
+            ret =
+                respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+        else
+            ret = respond_json_hdr(c, r, o->rep.status, o->rep.content_type, o->rep.body,
+                                   o->rep.len, o->header, o->value);
+        break;
+    case POOL_EXPIRED:
+        snprintf(detail, sizeof detail,
+                 "waited %.0f s for a free compute slot (the --queue-wait limit); every slot "
+                 "was busy: retry after the given seconds",
+                 w->t.waited_s);
+        ret = respond_busy(c, r, detail, pool_retry_after(p));
+        break;
+    case POOL_STOPPED:
+        ret = respond_busy(c, r, "the server is shutting down; retry after the given seconds",
+                           srv.cfg.retry_after);
+        break;
+    case POOL_GONE:
+        /* Nobody is likely to read this (the socket hung up), but a client that only shut down
+         * its sending side still learns what happened; a write to a closed socket just fails. */
+        snprintf(r->note, sizeof r->note, " (client went away after %.2fs%s)",
+                 w->t.waited_s + w->t.ran_s, w->t.ran_s > 0 ? ", computation cancelled" : "");
+        ret = respond_busy(c, r,
+                           "the connection was closed (or shut down for sending) while the "
+                           "request waited or ran, so it was cancelled",
+                           1);
+        break;
+    }
+    work_release(r);
+    return ret;
+}
+
+enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, work_fn fn, char *key,
+                              size_t klen)
+{
+    const union MHD_ConnectionInfo *ci;
+    work_task *w;
+    char detail[200];
+
+    if (r->task) return answer_ended(c, r, p);
+    if (!(w = calloc(1, sizeof *w))) {
+        free(key);
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    }
+    w->r = r;
+    w->fn = fn;
+    w->out.key = key;
+    w->out.klen = klen;
+    w->t.run = task_run;
+    w->t.park = task_park;
+    w->t.wake = task_wake;
+    snprintf(w->t.client, sizeof w->t.client, "%s", r->client);
+    ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+    w->t.fd = ci ? ci->connect_fd : -1;
+    r->task = w;
+    switch (pool_submit(p, &w->t)) {
+    case POOL_OK:
+        return MHD_YES; /* suspended; answered when resumed */
+    case POOL_FULL:
+        work_release(r);
+        snprintf(detail, sizeof detail,
+                 "every compute slot is busy and the wait queue is full (%u waiting at most); "
+                 "retry after the given seconds",
+                 pool_queue_cap(p));
+        return respond_busy(c, r, detail, pool_retry_after(p));
+    default:
+        work_release(r);
+        return respond_busy(c, r, "the server is shutting down; retry after the given seconds",
+                            srv.cfg.retry_after);
+    }
+}
+
+/* ---- POST /v1/NAME: the cache, then a compute slot ---- */
+
+/* Stores a 2xx answer under key with meta.cached set to true, so hits can be sent as stored. */
+static void cache_store(const char *key, size_t klen, const ljgap_reply *rep)
+{
+    cJSON *root = cJSON_ParseWithLength(rep->body, rep->len);
+    cJSON *meta = cJSON_GetObjectItemCaseSensitive(root, "meta");
+    cJSON *yes = NULL;
+    char *text = NULL;
+
+    if (!cJSON_IsObject(meta)) goto end;
+    yes = cJSON_CreateTrue();
+    if (!yes) goto end;
+    if (cJSON_HasObjectItem(meta, "cached"))
+        cJSON_ReplaceItemInObjectCaseSensitive(meta, "cached", yes);
+    else
+        cJSON_AddItemToObject(meta, "cached", yes);
+    text = cJSON_PrintUnformatted(root);
+    if (text) http_cache_put(srv.cache, key, klen, rep->status, text, strlen(text));
+end:
+    cJSON_free(text);
+    cJSON_Delete(root);
+}
+
+/* On a compute slot: the handler, then the cache. */
+static void compute_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    ljgap_call call = {cancel};
+    const char *endpoint = r->url + strlen("/v1/");
+    ljgap_handle_call(endpoint, r->body ? r->body : "", r->len, &call, &out->rep);
+    if (out->rep.status >= 200 && out->rep.status < 300 && out->key)
+        cache_store(out->key, out->klen, &out->rep);
+}
+
+enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
+{
+    const char *endpoint = r->url + strlen("/v1/");
+    size_t elen = strlen(endpoint), klen;
+    char *key, *hit = NULL;
+    size_t hitlen = 0;
+    int status = 0;
+    enum MHD_Result ret;
+
+    if (r->task) return route_offload(c, r, srv.slots, compute_work, NULL, 0);
+    /* the cache key: endpoint, NUL, body bytes */
+    klen = elen + 1 + r->len;
+    if (!(key = malloc(klen)))
+        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+    memcpy(key, endpoint, elen + 1);
+    if (r->len) memcpy(key + elen + 1, r->body, r->len);
+    if (http_cache_get(srv.cache, key, klen, &status, &hit, &hitlen) == 1) {
+        ret = respond_json(c, r, status, "application/json", hit, hitlen);
+        free(hit);
+        free(key);
+        return ret;
+    }
+    return route_offload(c, r, srv.slots, compute_work, key, klen);
+}
+
+int compute_exists(const char *rest)
+{
+    return ljgap_handler_has(rest);
+}
