@@ -160,6 +160,7 @@ static int stop_status(const ljgap_opts *o, double deadline)
 /* A cancel check every MC_CANCEL_EVERY paths (path i of a loop): a request whose client went
  * away stops within milliseconds, whatever the number of paths per batch. */
 #define MC_CANCEL_EVERY 256
+#define MC_PILOT_SHARE 0.1 /* the pilot's share of the time budget, at most */
 static int cancelled_now(const ljgap_opts *o, long i)
 {
     return (i % MC_CANCEL_EVERY) == MC_CANCEL_EVERY - 1 && o->cancel && *o->cancel;
@@ -186,20 +187,22 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
         g[n + i] = 0.8 + (gend - 0.8) * pow((double)i / (double)(nc - 1), 1.5);
     const double kfull = psd->k2;
 
-    /* pilot: cost per path and point */
-    long B = (o->samples + MC_NB - 1) / MC_NB, Bp = B / 16 > 8 ? B / 16 : 8;
+    /* pilot: cost per path and point, round-robin over the points so that a pilot cut short
+     * (it may use at most MC_PILOT_SHARE of the time budget) still sees every point */
+    long B = (o->samples + MC_NB - 1) / MC_NB, Bp = B / 16 > 8 ? B / 16 : 8, done = 0;
     double tp = ljgap_now(), Gend;
     gsl_rng_set(master, mix64(o->seed ^ 0x5bd1e995ULL));
-    for (size_t p = 0; p < np; p++)
-        for (long i = 0; i < Bp; i++) {
-            if (cancelled_now(o, i)) {
-                st = LJGAP_ECANCEL;
-                goto end;
-            }
-            mc_path(&m, gsl_rng_get(master), g[p], &kfull, 1, &Gend);
+    for (long i = 0; i < Bp; i++) {
+        if (cancelled_now(o, i)) {
+            st = LJGAP_ECANCEL;
+            goto end;
         }
-    double per_path = (ljgap_now() - tp) / (double)(Bp * (long)np);
-    double steps_pp = (double)m.steps / (double)(Bp * (long)np);
+        if (i > 0 && ljgap_now() - tp > MC_PILOT_SHARE * o->max_seconds) break;
+        for (size_t p = 0; p < np; p++, done++)
+            mc_path(&m, gsl_rng_get(master), g[p], &kfull, 1, &Gend);
+    }
+    double per_path = (ljgap_now() - tp) / (double)done;
+    double steps_pp = (double)m.steps / (double)done;
     double left = deadline - ljgap_now();
     double Bw = (double)o->max_work / (MC_NB * (double)np * fmax(steps_pp, 1.0));
     double Bt = 0.9 * left / (MC_NB * (double)np * fmax(per_path, 1e-9));
