@@ -18,12 +18,16 @@
  *   - the log: one line per request on stderr when libmicrohttpd reports it complete: method,
  *     path, status, milliseconds, request id, and notes (time waited for a slot, a client that
  *     went away). X-Request-Id is echoed when the client sends a sane one,
- *     otherwise made up, and is returned on every answer.
+ *     otherwise made up, and is returned on every answer. libmicrohttpd's own messages (a
+ *     refused connection, a client that closed mid-request) go to the same log with a prefix,
+ *     at most one of a kind per second: a flood of refused connections cannot flood the log.
  */
 #include "daemon.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <pthread.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -234,4 +238,32 @@ void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_con
         conns_close(srv.conns, *socket_context);
         *socket_context = NULL;
     }
+}
+
+/* libmicrohttpd's messages: prefixed, and a message repeated within a second is counted, not
+ * printed; the count goes out with the next different message (or the next second's). */
+void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap)
+{
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+    static char last[256];
+    static struct timespec t_last;
+    static unsigned long repeats;
+    char msg[256];
+    size_t n;
+
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    n = strlen(msg);
+    while (n > 0 && (msg[n - 1] == '\n' || msg[n - 1] == '\r'))
+        msg[--n] = '\0';
+    pthread_mutex_lock(&lock);
+    if (strcmp(msg, last) == 0 && seconds_since(&t_last) < 1.0) {
+        repeats++;
+    } else {
+        if (repeats) fprintf(stderr, "ljgapd: libmicrohttpd: (%lu more like: %s)\n", repeats, last);
+        fprintf(stderr, "ljgapd: libmicrohttpd: %s\n", msg);
+        snprintf(last, sizeof last, "%s", msg);
+        clock_gettime(CLOCK_MONOTONIC, &t_last);
+        repeats = 0;
+    }
+    pthread_mutex_unlock(&lock);
 }

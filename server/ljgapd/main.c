@@ -105,6 +105,7 @@ static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
         return NULL;
     }
     struct MHD_OptionItem opts[] = {
+        {MHD_OPTION_EXTERNAL_LOGGER, (intptr_t)ljgapd_mhd_log, NULL}, /* first, as MHD asks */
         {MHD_OPTION_SOCK_ADDR, 0, sa},
         {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)srv.cfg.connections, NULL},
         {MHD_OPTION_PER_IP_CONNECTION_LIMIT, (intptr_t)per_ip, NULL},

@@ -1,0 +1,254 @@
+#!/usr/bin/env bash
+# Serving a lab (issues 13 and 21), end to end over HTTP on loopback: the wait queue, fairness
+# between clients, cancel on disconnect, the queue's limits, connections that cost no thread,
+# the per-client connection limit, slow senders, and --trust-proxy. Clients come from distinct
+# loopback addresses (curl --interface 127.0.0.2 / 127.0.0.3; tests/serve/clients.py for idle,
+# dripping and probing connections). Every daemon is stopped by PID on every path (daemon.sh).
+#   BUILD=build tests/serve/run.sh
+set -u
+cd "$(dirname "$0")/../.."
+BUILD=${BUILD:-build}
+BIN=$BUILD/ljgapd
+WRAP=${WRAP:-}
+SLOW=1
+[ -n "$WRAP" ] && SLOW=5
+CLIENTS="python3 tests/serve/clients.py"
+
+. tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt
+
+if [ ! -x "$BIN" ]; then
+    echo "not ok - $BIN is not built"
+    exit 1
+fi
+
+H='Content-Type: application/json'
+fast() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":$1}}"; }
+# ~0.5 s of work each, distinct by C (no cache hits)
+slow() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":8,\"C\":$1},\"tol\":1e-9}"; }
+# Monte Carlo with 1e6 samples: ~20 s, or --max-seconds when the server caps it lower
+LONG='{"psd":{"kind":"power","D":2.5,"k1":1,"m0":0.5},"method":"montecarlo","samples":1000000}'
+post() { # post BODY [CURL ARGS...]: POST to /v1/adhesion; sets STATUS
+    local b=$1
+    shift
+    req POST /v1/adhesion -H "$H" --data-binary "$b" "$@"
+}
+bg_post() { # bg_post OUTFILE BODY [CURL ARGS...]: in the background, "STATUS END_TIME" to OUTFILE
+    local out=$1 b=$2
+    shift 2
+    (
+        s=$(curl -s --max-time $((40 * SLOW)) -o /dev/null -w '%{http_code}' -H "$H" \
+            --data-binary "$b" "$@" "$URL/v1/adhesion")
+        echo "$s $(date +%s.%N)" >"$out"
+    ) &
+}
+stop() { # stop: SIGTERM the current daemon, wait; sets RC
+    kill -TERM "$PID" 2>/dev/null
+    wait "$PID"
+    RC=$?
+}
+wait_grep() { # wait_grep SECONDS PATTERN FILE: until grep -q finds it (bounded)
+    for _ in $(seq 1 $(($1 * 20))); do
+        grep -q -- "$2" "$3" && return 0
+        sleep 0.05
+    done
+    return 1
+}
+wait_files() { # wait_files SECONDS FILE...: until every file exists (bounded)
+    local s=$1
+    shift
+    for _ in $(seq 1 $((s * 20))); do
+        local all=1
+        for f in "$@"; do [ -s "$f" ] || all=0; done
+        [ $all = 1 ] && return 0
+        sleep 0.05
+    done
+    return 1
+}
+
+# ================= one slot: the queue, cancel on disconnect =================
+# (--queue-wait 60: the fairness check's six slow requests must all get the slot, also in the
+# sanitizer build, where each takes seconds)
+if ! start one --compute-slots 1 --max-seconds 4 --queue-wait 60; then
+    echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/one.err")"
+    exit 1
+fi
+
+for i in 1 2 3 4 5 6; do bg_post "$tmp/six.$i" "$(fast 0.1$i)"; done
+wait_files 30 "$tmp"/six.{1,2,3,4,5,6}
+ok6=$(cat "$tmp"/six.* 2>/dev/null | grep -c '^200 ')
+check "6 parallel requests on 1 slot: all 200 ($ok6 of 6)" [ "$ok6" = 6 ]
+
+# A client that gives up on a long computation after 0.5 s frees the slot at once.
+curl -s --max-time 0.5 -o /dev/null -H "$H" --data-binary "$LONG" "$URL/v1/adhesion"
+t0=$(date +%s.%N)
+post "$(fast 0.21)"
+took=$(elapsed "$t0")
+check "an abandoned 1e6-sample request frees its slot: the next answers 200 in ${took} s (< 1 s)" \
+    eval '[ "$STATUS" = 200 ] && lt "$took" $((1 * SLOW))'
+check "the log says the client went away and the computation was cancelled" \
+    wait_grep 2 'client went away after [0-9.]*s, computation cancelled' "$tmp/one.err"
+
+# A request still waiting for the slot leaves the queue when its client goes away.
+bg_post "$tmp/hold" "$LONG"
+sleep 0.3
+curl -s --max-time 0.5 -o /dev/null -H "$H" --data-binary "$(fast 0.22)" "$URL/v1/adhesion"
+t0=$(date +%s.%N)
+req GET /healthz
+hz=$(elapsed "$t0")
+check "/healthz while the slot is busy and the queue is not empty: 200 in ${hz} s (< 1 s)" \
+    eval '[ "$STATUS" = 200 ] && lt "$hz" $((1 * SLOW))'
+post "$(fast 0.21)"
+check "a cached answer while the slot is busy: 200 at once, meta.cached" \
+    eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
+wait_files 30 "$tmp/hold"
+check "the long request still gets its answer at the --max-seconds cap ($(cut -d' ' -f1 "$tmp/hold"))" \
+    grep -qE '^(200|422) ' "$tmp/hold"
+check "a waiting request whose client went away left the queue without running" \
+    eval 'grep "client went away" "$tmp/one.err" | grep -qv "computation cancelled"'
+
+# ---- fairness: 127.0.0.2 sends five slow requests, 127.0.0.3 one just after ----
+for i in 1 2 3 4 5; do bg_post "$tmp/fa.$i" "$(slow 0.07$i)" --interface 127.0.0.2; done
+sleep 0.3
+bg_post "$tmp/fb" "$(slow 0.081)" --interface 127.0.0.3
+wait_files 60 "$tmp"/fa.{1,2,3,4,5} "$tmp/fb"
+tb=$(cut -d' ' -f2 "$tmp/fb")
+before=0
+for i in 1 2 3 4 5; do
+    ta=$(cut -d' ' -f2 "$tmp/fa.$i")
+    lt "$ta" "$tb" && before=$((before + 1))
+done
+okf=$(cat "$tmp"/fa.* "$tmp/fb" | grep -c '^200 ')
+check "fair shares: the single request of 127.0.0.3 waited for $before of the five of 127.0.0.2 (<= 1)" \
+    eval '[ "$okf" = 6 ] && [ "$before" -le 1 ]'
+stop
+check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
+
+# ================= the queue's limits =================
+if start limits --compute-slots 1 --queue 1 --queue-wait 1 --max-seconds 4; then
+    bg_post "$tmp/l1" "$LONG"
+    sleep 0.3
+    bg_post "$tmp/l2" "$(fast 0.31)"
+    sleep 0.2
+    t0=$(date +%s.%N)
+    post "$(fast 0.32)"
+    took=$(elapsed "$t0")
+    check "a third request with 1 running and 1 waiting (--queue 1): 503 at once (${took} s)" \
+        eval '[ "$STATUS" = 503 ] && lt "$took" $((1 * SLOW)) &&
+            [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]] && json ".type | endswith(\"/busy\")" &&
+            json ".detail | test(\"queue is full\")"'
+    wait_files 10 "$tmp/l2"
+    check "the waiting one gets 503 after --queue-wait 1 s ($(cat "$tmp/l2" | cut -d' ' -f1))" \
+        grep -q '^503 ' "$tmp/l2"
+    check "the log says it waited" grep -q 'waited=1\.' "$tmp/limits.err"
+    wait_files 30 "$tmp/l1"
+    stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
+else
+    echo "not ok - ljgapd --queue 1 did not start"
+fi
+
+# ================= connections that cost no thread =================
+if start flood --client-connections 1000; then
+    port=${URL##*:}
+    $CLIENTS hold "$port" 127.0.0.2 500 100 $((30 * SLOW)) >"$tmp/hold.out" 2>&1 &
+    holder=$!
+    pids+=("$holder")
+    wait_files $((20 * SLOW)) "$tmp/hold.out"
+    check "500 idle and 100 dripping connections from 127.0.0.2 are open ($(cat "$tmp/hold.out"))" \
+        grep -q '^open 600 closed 0$' "$tmp/hold.out"
+    threads=$(ls "/proc/$PID/task" | wc -l)
+    check "with 600 connections open the daemon has $threads threads (< 24)" [ "$threads" -lt 24 ]
+    t0=$(date +%s.%N)
+    req GET /healthz --interface 127.0.0.3
+    hz=$(elapsed "$t0")
+    check "127.0.0.3 still gets /healthz in ${hz} s (< 1 s)" \
+        eval '[ "$STATUS" = 200 ] && lt "$hz" $((1 * SLOW))'
+    post "$(fast 0.41)" --interface 127.0.0.3
+    check "127.0.0.3 still gets an adhesion answer (200)" [ "$STATUS" = 200 ]
+    kill "$holder" 2>/dev/null
+    wait "$holder" 2>/dev/null
+    stop
+    check "SIGTERM with 600 connections held: exit 0 ($RC)" [ "$RC" = 0 ]
+else
+    echo "not ok - ljgapd --client-connections 1000 did not start"
+fi
+
+# ================= the per-client connection limit (default 32) =================
+if start perclient; then
+    port=${URL##*:}
+    check "--help gives the per-client limit's default" \
+        eval '"$BIN" --help | grep -q -- "--client-connections N.*default 32"'
+    $CLIENTS hold "$port" 127.0.0.2 40 0 $((20 * SLOW)) >"$tmp/pc.out" 2>&1 &
+    holder=$!
+    pids+=("$holder")
+    wait_files $((10 * SLOW)) "$tmp/pc.out"
+    check "40 connections from 127.0.0.2: 32 kept, the 33rd and later refused ($(cat "$tmp/pc.out"))" \
+        grep -q '^open 32 closed 8$' "$tmp/pc.out"
+    req GET /healthz --interface 127.0.0.3
+    check "meanwhile 127.0.0.3 is served (200)" [ "$STATUS" = 200 ]
+    kill "$holder" 2>/dev/null
+    wait "$holder" 2>/dev/null
+    stop
+else
+    echo "not ok - ljgapd did not start with its defaults"
+fi
+
+# ================= slow senders =================
+if start slowsend --receive-timeout 2; then
+    port=${URL##*:}
+    cut_after=$($CLIENTS drip "$port" 127.0.0.2 0.5 $((10 * SLOW)))
+    check "a client sending its headers a byte every 0.5 s is cut after ${cut_after} s (--receive-timeout 2)" \
+        eval '[ "$cut_after" != open ] && lt 1.5 "$cut_after" && lt "$cut_after" $((4 * SLOW))'
+    req GET /healthz
+    check "a whole request in time is served (200)" [ "$STATUS" = 200 ]
+    stop
+else
+    echo "not ok - ljgapd --receive-timeout 2 did not start"
+fi
+
+# ================= behind a proxy: clients named by X-Forwarded-For =================
+if start proxy --trust-proxy --client-connections 2 --compute-slots 1 --max-seconds 3; then
+    bg_post "$tmp/p1" "$LONG" -H 'X-Forwarded-For: 10.1.1.1'
+    sleep 0.3
+    bg_post "$tmp/p2" "$(fast 0.51)" -H 'X-Forwarded-For: 10.1.1.1'
+    sleep 0.3
+    req GET /healthz -H 'X-Forwarded-For: 10.1.1.1'
+    check "--trust-proxy: a third request of 10.1.1.1 (2 in progress) gets 503 naming the limit" \
+        eval '[ "$STATUS" = 503 ] && json ".detail | test(\"client-connections\")" &&
+            [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]]'
+    req GET /healthz -H 'X-Forwarded-For: 10.9.9.9, 10.2.2.2'
+    check "--trust-proxy: another forwarded client (the last address counts) is served" \
+        [ "$STATUS" = 200 ]
+    wait_files 30 "$tmp/p1" "$tmp/p2"
+    stop
+else
+    echo "not ok - ljgapd --trust-proxy did not start"
+fi
+if start noproxy --client-connections 2; then
+    $CLIENTS hold "${URL##*:}" 127.0.0.2 2 0 $((10 * SLOW)) >"$tmp/np.out" 2>&1 &
+    holder=$!
+    pids+=("$holder")
+    wait_files $((10 * SLOW)) "$tmp/np.out"
+    req GET /healthz --interface 127.0.0.2 -H 'X-Forwarded-For: 10.3.3.3'
+    check "without --trust-proxy a forged X-Forwarded-For does not escape the address's limit" \
+        eval 'grep -q "^open 2 closed 0$" "$tmp/np.out" && [ "$STATUS" = 000 ]'
+    kill "$holder" 2>/dev/null
+    wait "$holder" 2>/dev/null
+    stop
+else
+    echo "not ok - ljgapd --client-connections 2 did not start"
+fi
+
+check "bad --queue-wait is refused with status 2" \
+    eval '"$BIN" --queue-wait 0 >/dev/null 2>&1; [ $? = 2 ]'
+check "bad --client-connections is refused with status 2" \
+    eval '"$BIN" --client-connections 0 >/dev/null 2>&1; [ $? = 2 ]'
+help_lists() { # every limit's flag is in --help
+    "$BIN" --help >"$tmp/help" || return 1
+    for f in --compute-slots --queue --queue-wait --max-seconds --connections \
+        --client-connections --trust-proxy --idle-timeout --receive-timeout --io-threads \
+        --max-body; do
+        grep -q -- "$f" "$tmp/help" || return 1
+    done
+}
+check "--help lists every limit" help_lists
