@@ -25,7 +25,9 @@ H='Content-Type: application/json'
 fast() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":$1}}"; }
 # ~0.5 s of work each, distinct by C (no cache hits)
 slow() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":8,\"C\":$1},\"tol\":1e-9}"; }
-# Monte Carlo with 1e6 samples: ~20 s, or --max-seconds when the server caps it lower
+# Monte Carlo with 1e6 samples: ~18 s. A client holds a slot with it for exactly as long as it
+# likes by giving up (curl --max-time): the computation is cancelled then (the first checks
+# show it), so the holders below do not depend on the machine's speed.
 LONG='{"psd":{"kind":"power","D":2.5,"k1":1,"m0":0.5},"method":"montecarlo","samples":1000000}'
 post() { # post BODY [CURL ARGS...]: POST to /v1/adhesion; sets STATUS
     local b=$1
@@ -67,8 +69,8 @@ wait_files() { # wait_files SECONDS FILE...: until every file exists (bounded)
 
 # ================= one slot: the queue, cancel on disconnect =================
 # (--queue-wait 60: the fairness check's six slow requests must all get the slot, also in the
-# sanitizer build, where each takes seconds)
-if ! start one --compute-slots 1 --max-seconds 4 --queue-wait 60; then
+# sanitizer and valgrind runs, where each takes seconds)
+if ! start one --compute-slots 1 --queue-wait 60; then
     echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/one.err")"
     exit 1
 fi
@@ -89,8 +91,8 @@ check "the log says the client went away and the computation was cancelled" \
     wait_grep 2 'client went away after [0-9.]*s, computation cancelled' "$tmp/one.err"
 
 # A request still waiting for the slot leaves the queue when its client goes away.
-bg_post "$tmp/hold" "$LONG"
-sleep 0.3
+bg_post "$tmp/hold" "$LONG" --max-time $((2 * SLOW))
+sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
 curl -s --max-time 0.5 -o /dev/null -H "$H" --data-binary "$(fast 0.22)" "$URL/v1/adhesion"
 t0=$(date +%s.%N)
 req GET /healthz
@@ -100,35 +102,39 @@ check "/healthz while the slot is busy and the queue is not empty: 200 in ${hz} 
 post "$(fast 0.21)"
 check "a cached answer while the slot is busy: 200 at once, meta.cached" \
     eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
-wait_files 30 "$tmp/hold"
-check "the long request still gets its answer at the --max-seconds cap ($(cut -d' ' -f1 "$tmp/hold"))" \
-    grep -qE '^(200|422) ' "$tmp/hold"
 check "a waiting request whose client went away left the queue without running" \
-    eval 'grep "client went away" "$tmp/one.err" | grep -qv "computation cancelled"'
+    eval 'wait_grep 2 "went away after 0\.[0-9]*s)" "$tmp/one.err"'
+wait_files $((10 * SLOW)) "$tmp/hold"
+check "the slot holder was cancelled when its client gave up" \
+    wait_grep 5 "went away after [0-9.]*s, computation cancelled.*" "$tmp/one.err"
 
 # ---- fairness: 127.0.0.2 sends five slow requests, 127.0.0.3 one just after ----
-for i in 1 2 3 4 5; do bg_post "$tmp/fa.$i" "$(slow 0.07$i)" --interface 127.0.0.2; done
-sleep 0.3
-bg_post "$tmp/fb" "$(slow 0.081)" --interface 127.0.0.3
-wait_files 60 "$tmp"/fa.{1,2,3,4,5} "$tmp/fb"
-tb=$(cut -d' ' -f2 "$tmp/fb")
-before=0
-for i in 1 2 3 4 5; do
-    ta=$(cut -d' ' -f2 "$tmp/fa.$i")
-    lt "$ta" "$tb" && before=$((before + 1))
-done
-okf=$(cat "$tmp"/fa.* "$tmp/fb" | grep -c '^200 ')
-check "fair shares: the single request of 127.0.0.3 waited for $before of the five of 127.0.0.2 (<= 1)" \
-    eval '[ "$okf" = 6 ] && [ "$before" -le 1 ]'
+# (not under valgrind: thirty times slower, the six take minutes; the paths they take are the
+# queue's, which the checks above exercise)
+if [ -z "$WRAP" ]; then
+    for i in 1 2 3 4 5; do bg_post "$tmp/fa.$i" "$(slow 0.07$i)" --interface 127.0.0.2; done
+    sleep 0.3
+    bg_post "$tmp/fb" "$(slow 0.081)" --interface 127.0.0.3
+    wait_files 60 "$tmp"/fa.{1,2,3,4,5} "$tmp/fb"
+    tb=$(cut -d' ' -f2 "$tmp/fb")
+    before=0
+    for i in 1 2 3 4 5; do
+        ta=$(cut -d' ' -f2 "$tmp/fa.$i")
+        lt "$ta" "$tb" && before=$((before + 1))
+    done
+    okf=$(cat "$tmp"/fa.* "$tmp/fb" | grep -c '^200 ')
+    check "fair shares: the single request of 127.0.0.3 waited for $before of the five of 127.0.0.2 (<= 1)" \
+        eval '[ "$okf" = 6 ] && [ "$before" -le 1 ]'
+fi
 stop
 check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 
 # ================= the queue's limits =================
-if start limits --compute-slots 1 --queue 1 --queue-wait 1 --max-seconds 4; then
-    bg_post "$tmp/l1" "$LONG"
-    sleep 0.3
+if start limits --compute-slots 1 --queue 1 --queue-wait $((2 * SLOW)); then
+    bg_post "$tmp/l1" "$LONG" --max-time $((4 * SLOW))
+    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
     bg_post "$tmp/l2" "$(fast 0.31)"
-    sleep 0.2
+    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.2 * s }')"
     t0=$(date +%s.%N)
     post "$(fast 0.32)"
     took=$(elapsed "$t0")
@@ -137,10 +143,10 @@ if start limits --compute-slots 1 --queue 1 --queue-wait 1 --max-seconds 4; then
             [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]] && json ".type | endswith(\"/busy\")" &&
             json ".detail | test(\"queue is full\")"'
     wait_files 10 "$tmp/l2"
-    check "the waiting one gets 503 after --queue-wait 1 s ($(cat "$tmp/l2" | cut -d' ' -f1))" \
+    check "the waiting one gets 503 after --queue-wait ($(cat "$tmp/l2" | cut -d' ' -f1))" \
         grep -q '^503 ' "$tmp/l2"
-    check "the log says it waited" grep -q 'waited=1\.' "$tmp/limits.err"
-    wait_files 30 "$tmp/l1"
+    check "the log says how long it waited" wait_grep 2 ' 503 .* waited=[0-9.]*s' "$tmp/limits.err"
+    wait_files $((10 * SLOW)) "$tmp/l1"
     stop
     check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
@@ -207,11 +213,11 @@ else
 fi
 
 # ================= behind a proxy: clients named by X-Forwarded-For =================
-if start proxy --trust-proxy --client-connections 2 --compute-slots 1 --max-seconds 3; then
-    bg_post "$tmp/p1" "$LONG" -H 'X-Forwarded-For: 10.1.1.1'
-    sleep 0.3
+if start proxy --trust-proxy --client-connections 2 --compute-slots 1; then
+    bg_post "$tmp/p1" "$LONG" -H 'X-Forwarded-For: 10.1.1.1' --max-time $((2 * SLOW))
+    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
     bg_post "$tmp/p2" "$(fast 0.51)" -H 'X-Forwarded-For: 10.1.1.1'
-    sleep 0.3
+    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
     req GET /healthz -H 'X-Forwarded-For: 10.1.1.1'
     check "--trust-proxy: a third request of 10.1.1.1 (2 in progress) gets 503 naming the limit" \
         eval '[ "$STATUS" = 503 ] && json ".detail | test(\"client-connections\")" &&
@@ -219,7 +225,7 @@ if start proxy --trust-proxy --client-connections 2 --compute-slots 1 --max-seco
     req GET /healthz -H 'X-Forwarded-For: 10.9.9.9, 10.2.2.2'
     check "--trust-proxy: another forwarded client (the last address counts) is served" \
         [ "$STATUS" = 200 ]
-    wait_files 30 "$tmp/p1" "$tmp/p2"
+    wait_files $((10 * SLOW)) "$tmp/p1" "$tmp/p2"
     stop
 else
     echo "not ok - ljgapd --trust-proxy did not start"
