@@ -23,6 +23,7 @@
  *     at most one of a kind per second: a flood of refused connections cannot flood the log.
  */
 #include "daemon.h"
+#include "forwarded.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -52,32 +53,13 @@ static void address_of(const struct sockaddr *sa, char *out, size_t n)
     if (!a || !inet_ntop(sa->sa_family, a, out, (socklen_t)n)) snprintf(out, n, "?");
 }
 
-/* The last comma-separated entry of an X-Forwarded-For value, if it is an IP address. */
-static int forwarded_for(const char *xff, char *out, size_t n)
-{
-    const char *last = strrchr(xff, ',');
-    char tok[POOL_CLIENT_MAX];
-    unsigned char buf[sizeof(struct in6_addr)];
-    size_t len;
-
-    last = last ? last + 1 : xff;
-    last += strspn(last, " \t");
-    len = strcspn(last, " \t");
-    if (len == 0 || len >= sizeof tok) return 0;
-    memcpy(tok, last, len);
-    tok[len] = '\0';
-    if (inet_pton(AF_INET, tok, buf) != 1 && inet_pton(AF_INET6, tok, buf) != 1) return 0;
-    snprintf(out, n, "%s", tok);
-    return 1;
-}
-
 static void client_of(struct MHD_Connection *c, char *out, size_t n)
 {
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
     if (srv.cfg.trust_proxy) {
         const char *xff = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Forwarded-For");
-        if (xff && forwarded_for(xff, out, n)) return;
+        if (xff && ljgap_forwarded_client(xff, out, n)) return;
     }
     address_of(ci ? ci->client_addr : NULL, out, n);
 }

@@ -21,13 +21,21 @@
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
  *     pointer that names a member of the request or a missing member of one that exists.
  *
+ * The pseudo-endpoint "@x-forwarded-for" feeds the body (up to its first NUL) to
+ * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
+ * with an empty name, or 1 with a numeric address that fits the buffer, for buffers of any size.
+ *
  * The handler's limits are lowered (fuzz_limits, and sim_control for simulations) so each
  * input runs in milliseconds; a computation that ignored them would trip libFuzzer's -timeout.
  *
  * The same file is linked into build/.../fuzz/replay (tests/fuzz/replay.c) with the normal
  * compiler: there a breach is counted (ljgap_fuzz_failures) instead of aborting.
  */
+#include "forwarded.h"
 #include "handler.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_errno.h>
@@ -201,6 +209,30 @@ static void check_ok(const char *ep, const ljgap_reply *r, const cJSON *doc)
     }
 }
 
+/* "@x-forwarded-for": the header parser, with buffers of several sizes. */
+static void fuzz_forwarded(const char *body, size_t len)
+{
+    static const size_t sizes[] = {0, 1, 8, 16, 46, 64};
+    char *xff = malloc(len + 1), out[64];
+    unsigned char addr[sizeof(struct in6_addr)];
+    ljgap_reply none = {0};
+    if (!xff) return;
+    memcpy(xff, body, len);
+    xff[len] = '\0';
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        int ok;
+        memset(out, 'x', sizeof out);
+        ok = ljgap_forwarded_client(xff, out, sizes[i]);
+        if (ok != 0 && ok != 1) breach("@x-forwarded-for", &none, "returned %d", ok);
+        if (sizes[i] == 0) continue;
+        if (!memchr(out, '\0', sizes[i])) breach("@x-forwarded-for", &none, "name not ended");
+        if (!ok && out[0]) breach("@x-forwarded-for", &none, "0 with a name");
+        if (ok && inet_pton(AF_INET, out, addr) != 1 && inet_pton(AF_INET6, out, addr) != 1)
+            breach("@x-forwarded-for", &none, "1 with \"%.64s\", not an address", out);
+    }
+    free(xff);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const uint8_t *nl = memchr(data, '\n', size);
@@ -215,6 +247,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     memcpy(ep, data, eplen);
     ep[eplen] = '\0';
     if (len) memcpy(body, nl + 1, len);
+    if (strcmp(ep, "@x-forwarded-for") == 0) {
+        fuzz_forwarded(body, len);
+        goto end;
+    }
     known = ljgap_handler_has(ep);
     if (strcmp(ep, "simulations") == 0) {
         ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, &r);
