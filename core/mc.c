@@ -159,7 +159,7 @@ static int stop_status(const ljgap_opts *o, double deadline)
 
 /* A cancel check every MC_CANCEL_EVERY paths (path i of a loop): a request whose client went
  * away stops within milliseconds, whatever the number of paths per batch. */
-#define MC_CANCEL_EVERY 256
+#define MC_CANCEL_EVERY 32
 #define MC_PILOT_SHARE 0.1 /* the pilot's share of the time budget, at most */
 static int cancelled_now(const ljgap_opts *o, long i)
 {
