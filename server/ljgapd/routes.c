@@ -27,10 +27,22 @@
 extern const char ljgapd_openapi[];
 extern const size_t ljgapd_openapi_len;
 
+/* Alive, and how busy: the compute slots and their queue, the open connections. */
 static enum MHD_Result route_healthz(struct MHD_Connection *c, request *r)
 {
-    static const char ok[] = "{\"status\":\"pass\"}";
-    return respond_json(c, r, MHD_HTTP_OK, "application/health+json", ok, sizeof ok - 1);
+    pool_stats ps;
+    conns_stats cs;
+    char body[200];
+    int n;
+
+    pool_get_stats(srv.slots, &ps);
+    conns_get_stats(srv.conns, &cs);
+    n = snprintf(body, sizeof body,
+                 "{\"status\":\"pass\",\"compute\":{\"slots\":%u,\"running\":%u,\"waiting\":%u,"
+                 "\"queue\":%u},\"connections\":{\"open\":%u,\"limit\":%u}}",
+                 srv.cfg.slots, ps.running, ps.waiting, srv.cfg.queue, cs.open,
+                 srv.cfg.connections);
+    return respond_json(c, r, MHD_HTTP_OK, "application/health+json", body, (size_t)n);
 }
 
 static enum MHD_Result route_version(struct MHD_Connection *c, request *r)

@@ -48,6 +48,14 @@ stop() { # stop: SIGTERM the current daemon, wait; sets RC
     wait "$PID"
     RC=$?
 }
+wait_health() { # wait_health SECONDS JQ-CONDITION: until /healthz satisfies it (bounded)
+    for _ in $(seq 1 $(($1 * SLOW * 20))); do
+        req GET /healthz
+        json "$2" && return 0
+        sleep 0.05
+    done
+    return 1
+}
 wait_grep() { # wait_grep SECONDS PATTERN FILE: until grep -q finds it (bounded)
     for _ in $(seq 1 $(($1 * 20))); do
         grep -q -- "$2" "$3" && return 0
@@ -91,9 +99,17 @@ check "the log says the client went away and the computation was cancelled" \
     wait_grep 2 'client went away after [0-9.]*s, computation cancelled' "$tmp/one.err"
 
 # A request still waiting for the slot leaves the queue when its client goes away.
-bg_post "$tmp/hold" "$LONG" --max-time $((2 * SLOW))
-sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
-curl -s --max-time 0.5 -o /dev/null -H "$H" --data-binary "$(fast 0.22)" "$URL/v1/adhesion"
+bg_post "$tmp/hold" "$LONG" --max-time $((4 * SLOW))
+check "/healthz shows the holder running" wait_health 5 '.compute.running == 1'
+curl -s --max-time "$(awk -v s="$SLOW" 'BEGIN { print 0.5 * s }')" -o /dev/null -H "$H" \
+    --data-binary "$(fast 0.22)" "$URL/v1/adhesion" &
+waiter=$!
+check "/healthz shows one request waiting, then none once its client gave up" \
+    eval 'wait_health 5 ".compute.waiting == 1" && wait "$waiter"; wait_health 2 ".compute.waiting == 0"'
+check "/healthz: slots, queue and connections" \
+    json '.compute.slots == 1 and .compute.queue == 64 and .connections.open >= 1
+        and .connections.limit == 1024'
+
 t0=$(date +%s.%N)
 req GET /healthz
 hz=$(elapsed "$t0")
