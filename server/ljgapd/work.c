@@ -59,7 +59,13 @@ static void task_park(pool_task *t)
 
 static void task_wake(pool_task *t)
 {
-    MHD_resume_connection(((work_task *)t)->r->conn);
+    request *r = ((work_task *)t)->r;
+    /* The note is written here, not when the answer is queued: libmicrohttpd may find the
+     * connection closed once resumed and end the request without calling the route again. */
+    if (t->outcome == POOL_GONE)
+        snprintf(r->note, sizeof r->note, " (client went away after %.2fs%s)",
+                 t->waited_s + t->ran_s, t->ran_s > 0 ? ", computation cancelled" : "");
+    MHD_resume_connection(r->conn);
 }
 
 /* The access handler's second call, after the resume: answer from the ended task. */
@@ -70,7 +76,8 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     enum MHD_Result ret = MHD_YES;
     char detail[160];
 
-    if (w->t.waited_s >= 0.05) snprintf(r->note, sizeof r->note, " waited=%.2fs", w->t.waited_s);
+    if (w->t.waited_s >= 0.05 && w->t.outcome != POOL_GONE)
+        snprintf(r->note, sizeof r->note, " waited=%.2fs", w->t.waited_s);
     switch (w->t.outcome) {
     case POOL_DONE:
         if (o->problem)
@@ -96,8 +103,6 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     case POOL_GONE:
         /* Nobody is likely to read this (the socket hung up), but a client that only shut down
          * its sending side still learns what happened; a write to a closed socket just fails. */
-        snprintf(r->note, sizeof r->note, " (client went away after %.2fs%s)",
-                 w->t.waited_s + w->t.ran_s, w->t.ran_s > 0 ? ", computation cancelled" : "");
         ret = respond_busy(c, r,
                            "the connection was closed (or shut down for sending) while the "
                            "request waited or ran, so it was cancelled",

@@ -57,7 +57,7 @@ wait_health() { # wait_health SECONDS JQ-CONDITION: until /healthz satisfies it 
     return 1
 }
 wait_grep() { # wait_grep SECONDS PATTERN FILE: until grep -q finds it (bounded)
-    for _ in $(seq 1 $(($1 * 20))); do
+    for _ in $(seq 1 $(($1 * SLOW * 20))); do
         grep -q -- "$2" "$3" && return 0
         sleep 0.05
     done
@@ -99,7 +99,7 @@ check "the log says the client went away and the computation was cancelled" \
     wait_grep 2 'client went away after [0-9.]*s, computation cancelled' "$tmp/one.err"
 
 # A request still waiting for the slot leaves the queue when its client goes away.
-bg_post "$tmp/hold" "$LONG" --max-time $((4 * SLOW))
+bg_post "$tmp/hold" "$LONG" --max-time $((2 * SLOW))
 check "/healthz shows the holder running" wait_health 5 '.compute.running == 1'
 curl -s --max-time "$(awk -v s="$SLOW" 'BEGIN { print 0.5 * s }')" -o /dev/null -H "$H" \
     --data-binary "$(fast 0.22)" "$URL/v1/adhesion" &
@@ -119,10 +119,11 @@ post "$(fast 0.21)"
 check "a cached answer while the slot is busy: 200 at once, meta.cached" \
     eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
 check "a waiting request whose client went away left the queue without running" \
-    eval 'wait_grep 2 "went away after 0\.[0-9]*s)" "$tmp/one.err"'
+    eval 'wait_grep 2 "went away after [0-9.]*s)" "$tmp/one.err"'
 wait_files $((10 * SLOW)) "$tmp/hold"
+cancelled() { [ "$(grep -c 'went away after [0-9.]*s, computation cancelled' "$tmp/one.err")" = 2 ]; }
 check "the slot holder was cancelled when its client gave up" \
-    wait_grep 5 "went away after [0-9.]*s, computation cancelled.*" "$tmp/one.err"
+    eval 'for _ in $(seq 1 $((100 * SLOW))); do cancelled && break; sleep 0.05; done; cancelled'
 
 # ---- fairness: 127.0.0.2 sends five slow requests, 127.0.0.3 one just after ----
 # (not under valgrind: thirty times slower, the six take minutes; the paths they take are the
@@ -147,10 +148,10 @@ check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 
 # ================= the queue's limits =================
 if start limits --compute-slots 1 --queue 1 --queue-wait $((2 * SLOW)); then
-    bg_post "$tmp/l1" "$LONG" --max-time $((4 * SLOW))
-    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
+    bg_post "$tmp/l1" "$LONG" --max-time $((8 * SLOW))
+    wait_health 5 '.compute.running == 1'
     bg_post "$tmp/l2" "$(fast 0.31)"
-    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.2 * s }')"
+    wait_health 5 '.compute.waiting == 1'
     t0=$(date +%s.%N)
     post "$(fast 0.32)"
     took=$(elapsed "$t0")
@@ -162,7 +163,7 @@ if start limits --compute-slots 1 --queue 1 --queue-wait $((2 * SLOW)); then
     check "the waiting one gets 503 after --queue-wait ($(cat "$tmp/l2" | cut -d' ' -f1))" \
         grep -q '^503 ' "$tmp/l2"
     check "the log says how long it waited" wait_grep 2 ' 503 .* waited=[0-9.]*s' "$tmp/limits.err"
-    wait_files $((10 * SLOW)) "$tmp/l1"
+    wait_files $((12 * SLOW)) "$tmp/l1"
     stop
     check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
@@ -230,10 +231,10 @@ fi
 
 # ================= behind a proxy: clients named by X-Forwarded-For =================
 if start proxy --trust-proxy --client-connections 2 --compute-slots 1; then
-    bg_post "$tmp/p1" "$LONG" -H 'X-Forwarded-For: 10.1.1.1' --max-time $((2 * SLOW))
-    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
+    bg_post "$tmp/p1" "$LONG" -H 'X-Forwarded-For: 10.1.1.1' --max-time $((3 * SLOW))
+    wait_health 5 '.compute.running == 1'
     bg_post "$tmp/p2" "$(fast 0.51)" -H 'X-Forwarded-For: 10.1.1.1'
-    sleep "$(awk -v s="$SLOW" 'BEGIN { print 0.3 * s }')"
+    wait_health 5 '.compute.waiting == 1'
     req GET /healthz -H 'X-Forwarded-For: 10.1.1.1'
     check "--trust-proxy: a third request of 10.1.1.1 (2 in progress) gets 503 naming the limit" \
         eval '[ "$STATUS" = 503 ] && json ".detail | test(\"client-connections\")" &&
