@@ -17,9 +17,11 @@ CMDS := curl:curl jq:jq
 #   ALL_EXTRA          more things `make all` builds
 #   TEST_PREP          things built or fetched before the test suites run
 #   RUN_PREP           things `make run` needs (the page's vendored files, say)
+#   EXTRA_LIBS         libraries pkg-config does not name (linked before it)
 ALL_EXTRA :=
 TEST_PREP :=
 RUN_PREP :=
+EXTRA_LIBS :=
 
 ifdef SANITIZE
 BUILD ?= build/san
@@ -51,7 +53,7 @@ WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-pro
 ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore \
               -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
-LDLIBS := $(PKG_LIBS) -lpthread -lm
+LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm
 ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)
 
 CORE_SRC := $(wildcard core/*.c)
