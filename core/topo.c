@@ -224,19 +224,19 @@ static void binner_free(binner *b)
     free(b->cor);
 }
 
-/* The bin of |q| (TOPO_NO_BIN beyond k_nyq). */
-static uint16_t bin_of(const binner *b, double q)
+/* The bin of |q| (TOPO_NO_BIN beyond k_nyq); x = ln(q/kf). */
+static uint16_t bin_of(const binner *b, double q, double x)
 {
     if (!(q > 0) || q > b->knyq * (1 + 1e-12)) return TOPO_NO_BIN;
-    double x = floor(b->B * log10(q / b->kf) + 0.5);
-    size_t i = x < 0 ? 0 : (size_t)x;
+    double f = floor(b->B * x / M_LN10 + 0.5);
+    size_t i = f < 0 ? 0 : (size_t)f;
     return (uint16_t)(i < b->nb ? i : b->nb - 1);
 }
 
-static void binner_add(binner *b, uint16_t i, double q, double P, double mult)
+/* One mode of |q| = q, x = ln(q/kf), periodogram P, counted mult times, into bin i. */
+static void binner_add(binner *b, uint16_t i, double x, double P, double mult)
 {
     if (i == TOPO_NO_BIN) return;
-    double x = log(q / b->kf);
     b->cnt[i] += mult;
     b->sl[3 * i] += mult * x;
     b->sl[3 * i + 1] += mult * x * x;
@@ -255,23 +255,33 @@ static const double hann_rho2[3] = {1.0, 4.0 / 9.0, 1.0 / 36.0};
  * are the conjugates of entries of the half spectrum (the same |q|, the same bin). */
 static void bin_correlations_map(binner *b, const uint16_t *bi, size_t nx, size_t ny)
 {
-    size_t nxc = nx / 2 + 1;
+    const size_t nxc = nx / 2 + 1;
+    double w[5][5];
+    for (int c = 0; c < 5; c++)
+        for (int a = 0; a < 5; a++)
+            w[c][a] = hann_rho2[abs(c - 2)] * hann_rho2[abs(a - 2)];
     for (size_t j = 0; j < ny; j++)
         for (size_t i = 0; i < nxc; i++) {
             uint16_t me = bi[j * nxc + i];
             if (me == TOPO_NO_BIN) continue;
             double sum = 0, mult = (i == 0 || 2 * i == nx) ? 1 : 2;
-            for (long a = -2; a <= 2; a++)
-                for (long c = -2; c <= 2; c++) {
-                    long ii = (long)i + a, jj = (long)j + c;
-                    if (ii < 0 || ii > (long)nx / 2) { /* the conjugate: -q */
-                        ii = ii < 0 ? -ii : (long)nx - ii;
-                        jj = -jj;
+            if (j >= 2 && j + 2 < ny && i >= 2 && i + 2 < nxc) { /* inside: no wrapping */
+                const uint16_t *r = bi + (j - 2) * nxc + (i - 2);
+                for (int c = 0; c < 5; c++, r += nxc)
+                    for (int a = 0; a < 5; a++)
+                        sum += r[a] == me ? w[c][a] : 0;
+            } else {
+                for (long c = -2; c <= 2; c++)
+                    for (long a = -2; a <= 2; a++) {
+                        long ii = (long)i + a, jj = (long)j + c;
+                        if (ii < 0 || ii > (long)nx / 2) { /* the conjugate: -q */
+                            ii = ii < 0 ? -ii : (long)nx - ii;
+                            jj = -jj;
+                        }
+                        jj = ((jj % (long)ny) + (long)ny) % (long)ny;
+                        if (bi[(size_t)jj * nxc + (size_t)ii] == me) sum += w[c + 2][a + 2];
                     }
-                    jj = ((jj % (long)ny) + (long)ny) % (long)ny;
-                    if (ii >= 0 && ii < (long)nxc && bi[(size_t)jj * nxc + (size_t)ii] == me)
-                        sum += hann_rho2[labs(a)] * hann_rho2[labs(c)];
-                }
+            }
             b->cor[me] += mult * sum;
         }
 }
@@ -417,14 +427,14 @@ typedef struct {
     double v0, v2; /* Σ over independent modes of the squared terms */
 } moments;
 
-static void moments_add(moments *m, double q, double PD, double mult)
+static void moments_add(moments *m, double q2, double PD, double mult)
 {
     /* mult full modes = mult/2 independent ones, each carrying X = 2 PD, exponential: Var X =
      * (E X)² = E[X²]/2, so X²/2 estimates each one's variance without bias */
     m->m0 += mult * PD;
-    m->m2 += mult * q * q * PD;
+    m->m2 += mult * q2 * PD;
     m->v0 += 0.25 * mult * (2 * PD) * (2 * PD);
-    m->v2 += 0.25 * mult * (2 * q * q * PD) * (2 * q * q * PD);
+    m->v2 += 0.25 * mult * (2 * q2 * PD) * (2 * q2 * PD);
 }
 
 /* The 2-D periodogram of a (ny rows of nx) into the binner and the moments. */
@@ -441,17 +451,19 @@ static int map_spectrum(double *a, size_t nx, size_t ny, double dx, double dy, b
     fftw_execute(p);
     double dqx = 2 * M_PI / ((double)nx * dx), dqy = 2 * M_PI / ((double)ny * dy);
     double norm = dx * dy / (4 * M_PI * M_PI * (double)nx * (double)ny), dA = dqx * dqy;
+    double kf2 = b->kf * b->kf;
     for (size_t j = 0; j < ny; j++) {
         double qy = dqy * (j <= ny / 2 ? (double)j : (double)j - (double)ny);
         for (size_t i = 0; i < nxc; i++) {
             const double *z = c[j * nxc + i];
-            double P = norm * (z[0] * z[0] + z[1] * z[1]), q = hypot(dqx * (double)i, qy);
+            double qx = dqx * (double)i, q2 = qx * qx + qy * qy;
+            double P = norm * (z[0] * z[0] + z[1] * z[1]), q = sqrt(q2), x = 0.5 * log(q2 / kf2);
             double mult = (i == 0 || 2 * i == nx) ? 1 : 2; /* i and -i (the other half) */
-            uint16_t k = i == 0 && j == 0 ? TOPO_NO_BIN : bin_of(b, q);
+            uint16_t k = i == 0 && j == 0 ? TOPO_NO_BIN : bin_of(b, q, x);
             if (bi) bi[j * nxc + i] = k;
             if (i == 0 && j == 0) continue;
-            moments_add(mo, q, P * dA, mult);
-            binner_add(b, k, q, P, mult);
+            moments_add(mo, q2, P * dA, mult);
+            binner_add(b, k, x, P, mult);
         }
     }
     if (bi) bin_correlations_map(b, bi, nx, ny);
@@ -478,12 +490,12 @@ static int profile_spectrum(double *a, size_t n, double d, binner *b, moments *m
     if (bi) bi[0] = TOPO_NO_BIN;
     for (size_t i = 1; i < nc; i++) {
         const double *z = c[i];
-        double PP = norm * (z[0] * z[0] + z[1] * z[1]), k = dk * (double)i;
+        double PP = norm * (z[0] * z[0] + z[1] * z[1]), k = dk * (double)i, x = log(k / b->kf);
         double mult = 2 * i == n ? 1 : 2;
-        uint16_t bk = bin_of(b, k);
+        uint16_t bk = bin_of(b, k, x);
         if (bi) bi[i] = bk;
-        moments_add(mo, k, PP * dk, mult);
-        binner_add(b, bk, k, PP, mult);
+        moments_add(mo, k * k, PP * dk, mult);
+        binner_add(b, bk, x, PP, mult);
     }
     if (bi) bin_correlations_line(b, bi, n);
     st = LJGAP_OK;
