@@ -96,7 +96,8 @@ const LJTopo = (() => {
     const text = await f.text();
     const q = query();
     const p = api.resetPanel("topo");
-    p.requests.push({ endpoint: `psd?${q}`, text: `(${f.name}, ${text.length} bytes)`, label: "psd" });
+    /* the export records the upload (its file and query), not the matrix itself */
+    p.requests.push({ endpoint: `psd?${q}`, text: JSON.stringify({ file: f.name, bytes: text.length, content_type: "text/plain", query: q }), label: "psd" });
     $("card-topo").hidden = false;
     api.setBusy(`psd of ${f.name}`);
     let res;

@@ -216,3 +216,17 @@ int compute_exists(const char *rest)
 {
     return ljgap_handler_has(rest);
 }
+
+/* On a compute slot: a text upload (its body can be 64 MiB: no cache). */
+static void psd_text_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    ljgap_call call = {cancel};
+    ljgap_handle_text("psd", r->params, r->nparams, r->body ? r->body : "", r->len, &call,
+                      &out->rep);
+}
+
+enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
+{
+    if (!r->text) return route_compute(c, r);
+    return route_offload(c, r, srv.slots, psd_text_work, NULL, 0);
+}

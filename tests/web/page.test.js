@@ -5,7 +5,8 @@
 // (canvas pixels inked, readouts filled, numbers against theory.md §4's reference values); hover
 // readouts; a 422 problem lands beside the field its pointer names; exports (CSV, JSON, PNG,
 // "copy as curl" re-run with curl gives the same numbers); no console error; no request leaves
-// the local server. Leaves screenshots in $BUILD/web-screenshot*.png.
+// the local server; a measured topography: upload, its PSD and fit, k1/k2 picked on the plot,
+// the adhesion of the spectrum. Leaves screenshots in $BUILD/web-screenshot*.png.
 "use strict";
 
 const { test, before, after } = require("node:test");
@@ -282,6 +283,65 @@ test("simulation jobs: a form with a progress bar when the server offers them, e
   await page.waitForFunction(() => document.getElementById("sim-state").dataset.status === "refused");
   consoleErrors.splice(0, consoleErrors.length, ...consoleErrors.filter((m) => !/status of 422/.test(m)));
   assert.match(await page.textContent('.err[data-for="sim-n"]'), /even/);
+});
+
+test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on the plot, adhesion", async () => {
+  // a 128² synthetic map (bench/topo gen: D = 2.3, dx = 10 nm, h_rms 5 nm) as a text file
+  const file = path.join(userDir, "map.txt");
+  execFileSync(path.join(BUILD, "bench/topo"), ["gen", file, "128"]);
+  await page.check("#use-material");
+  await page.selectOption("#modulus-kind", "E_star");
+  await page.fill("#E_star", "1e11"); // χ = 34 nm: k0/χ = 1.4e7 1/m, inside the map's band
+  await page.setInputFiles("#topo-file", file);
+  await page.fill("#topo-dx", "1e-8");
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of|refused/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent("#status-text"), /^PSD of map\.txt: \d+ bins/);
+  assert.ok(await page.isVisible("#card-topo"));
+  assert.ok((await inked("plot-topo")) > 500, "topography PSD canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")));
+  assert.equal(fig.xLog && fig.yLog, true);
+  assert.equal(fig.series[0].name, "P (bins, m⁴)");
+  assert.match(fig.series[1].name, /^fit: D = /);
+  assert.ok(fig.marks.some((m) => m.label === "k0/χ") && fig.marks.some((m) => m.label === "k1"));
+  const rows = await page.$$eval("#readout-topo table tr", (r) => r.map((x) => [...x.children].map((c) => c.textContent)));
+  const byName = Object.fromEntries(rows.map((r) => [r[0], r.slice(1)]));
+  const D = Number(byName["D (H = 3 − D)"][0]);
+  assert.ok(Math.abs(D - 2.3) < 0.1, `D ${D}`);
+  assert.match(byName["D (H = 3 − D)"][1], /^± \d\.\de-\d+$/);
+  assert.match(byName.h_rms[0], /e-9 m$/);
+  assert.match(await page.textContent("#readout-topo"), /theory's domain k > k0\/χ/);
+  const k1 = Number(await page.inputValue("#topo-k1"));
+  assert.ok(k1 >= 1.1 * 0.46978 / 3.375e-8 * 0.999, `k1 ${k1}`);
+  // a click on the plot sets k2 where the cursor is
+  await page.selectOption("#topo-pick", "k2");
+  const box = await page.locator("#plot-topo .u-over").boundingBox();
+  await page.mouse.click(box.x + box.width * 0.8, box.y + box.height * 0.5);
+  const k2 = Number(await page.inputValue("#topo-k2"));
+  assert.ok(k2 > k1 && Number.isFinite(k2), `k2 ${k2} after the click`);
+  assert.ok((await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")))).marks.some((m) => m.label === "k2"));
+  await page.click("#topo-adhesion");
+  await page.waitForFunction(() => /^Adhesion of the measured|refused/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /Δγeff\/Δγ = /);
+  const ad = await page.textContent("#readout-topo-adhesion");
+  assert.match(ad, /Δγeff\/Δγ/);
+  assert.match(ad, new RegExp(`to k2 = `));
+  const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  const adReq = json.requests.find((r) => r.label === "adhesion").body;
+  assert.equal(adReq.units, "SI");
+  assert.equal(adReq.psd.k[0], k1);
+  assert.equal(adReq.psd.k[adReq.psd.k.length - 1], k2);
+  await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-topo.png"), fullPage: true });
+  // a bad matrix: the line and column beside the file field
+  const before422 = consoleErrors.length;
+  await page.setInputFiles("#topo-file", { name: "bad.txt", mimeType: "text/plain", buffer: Buffer.from("1 2 3\n4 x 6\n") });
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /refused/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent('.err[data-for="topo-file"]'), /line 2, column 3/);
+  const logged = consoleErrors.splice(before422);
+  assert.ok(logged.every((m) => /status of 422/.test(m)), String(logged));
+  await page.fill("#E_star", "1e9");
 });
 
 test("all panels for the screenshot; no console error, no CSP violation, nothing left the server", async () => {
