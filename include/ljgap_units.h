@@ -4,8 +4,8 @@
  * E*, flat-surface work of adhesion Δγ, Lennard-Jones length ε) fixes the scales:
  *   χ = 3ε²E* /(16Δγ)   (length, m)         k̃ = χk,  g̃ = g/ε
  *   σ0 = 16Δγ/(9√3ε)   (stress, Pa, eq. 9)  P̃S(k̃) = PS(k)/(ε²χ²)
- * PSD convention: m0 = 2π∫k PS(k) dk (isotropic 2-D PSD, (22)); tools that define
- * m0 = ∫∫PS d²q with q = 2πk, or use angular wavenumbers, differ by factors of (2π)².
+ * PSD convention: k angular, m0 = 2π∫k PS(k) dk = ∫∫PS d²k (isotropic 2-D PSD, (22));
+ * SurfaceTopography's C(q) and the 1/λ tools' S(f) are (2π)² PS (docs/topography.md).
  * Conversion functions are pure arithmetic; they know nothing of JSON.
  */
 #ifndef LJGAP_UNITS_H

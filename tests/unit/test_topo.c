@@ -397,6 +397,9 @@ static void conversions(void **state)
                 worst = fmax(worst, fabs(C_st / (4 * M_PI * M_PI * synth_P(&l, q)) - 1));
         }
     near(sumC / (4 * M_PI * M_PI), mom.m0, 1e-10 * mom.m0, "ST: (2π)^-2 ∫∫C d²q = h_rms²");
+    /* the 1/λ 2-D PSD S(f) = (2π)² P(2πf) takes the same values as C at f = q/2π, and its lattice
+     * has Δf = 1/L: ∫∫ S d²f = Σ S / L² */
+    near(sumC / (dq * dq) / (L * L), mom.m0, 1e-10 * mom.m0, "1/λ: ∫∫S d²f = h_rms²");
     near(worst, 0, 1e-9, "ST: C = (2π)² P at every wavevector");
 
     /* 1/λ tools: S(f) with ∫∫ S d²f = h_rms², f = k/2π: S(f) = (2π)² P(2πf). Radial:
