@@ -636,7 +636,8 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
 }
 
 /* With a material: where the measured band lies against the theory's k > k0/χ, the k1 it
- * proposes (the first bin inside, at least K1_MARGIN k0/χ) and the psd object from there. */
+ * proposes (the first bin, or K1_MARGIN k0/χ when that is higher) and the psd object from
+ * there. */
 static void put_domain(job *j, const ljgap_topo_result *r)
 {
     const ljgap_material *m = &j->rq.mat;

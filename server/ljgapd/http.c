@@ -75,6 +75,7 @@ static request *request_new(struct MHD_Connection *c, const char *url, const cha
 
     if (!r) return NULL;
     clock_gettime(CLOCK_MONOTONIC, &r->t0);
+    r->limit = srv.cfg.max_body; /* a text route raises it in request_begin */
     r->conn = c;
     r->rec = ci ? ci->socket_context : NULL;
     r->url = url;
