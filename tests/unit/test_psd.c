@@ -483,7 +483,9 @@ static void bad_json_inputs(void **state)
         add(&b, "]");
     }
     add(&b, "]");
-    answer p = ask("psd", bad_json(NULL, 0, 0, b.s, NULL, NULL));
+    char *plane = bad_json(NULL, 0, 0, b.s, NULL, NULL);
+    answer p = ask("psd", plane);
+    free(plane);
     assert_int_equal(p.status, 422);
     assert_string_equal(get(p.body, "type")->valuestring,
                         "https://ljgap.example/problems/outside-model");
