@@ -25,6 +25,11 @@ typedef struct {
 } spline_fn;
 
 #define POLY_N 6 /* degree-5 local interpolation for the maximum */
+/* The natural spline's end condition (u'' = 0) is wrong by O(h^2) at the window's first
+ * node, and that error falls by 2 - √3 ≈ 0.27 per node inwards: 12 nodes put it below 1.5e-7
+ * of its size at the root. With 4 it left a term that jumps with the root's place between
+ * the nodes, ~6e-8 in g_eq of Fig. 4, which no refinement removes. */
+#define SPLINE_LEAD 12
 
 /* Derivative at x of the Lagrange polynomial through (px[a], py[a]), a < POLY_N. */
 static double poly_deriv(const double *px, const double *py, double x)
@@ -97,9 +102,9 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
         return LJGAP_EFAIL;
     }
     j--; /* u[j] <= 0 < u[j+1] */
-    /* spline on a window that starts a few points left of the root, away from the
+    /* spline on a window that starts SPLINE_LEAD nodes left of the root, away from the
      * steep wall values */
-    size_t s0 = j >= 4 ? j - 4 : 0;
+    size_t s0 = j >= SPLINE_LEAD ? j - SPLINE_LEAD : 0;
     size_t m = n - s0;
     int st = LJGAP_EFAIL;
     spline_fn S = {gsl_spline_alloc(gsl_interp_cspline, m), gsl_interp_accel_alloc(), 0, NULL,

@@ -39,7 +39,8 @@
 #include <string.h>
 
 #define ZETA_BETA 10.0  /* weight of the variance in the marching variable zeta */
-#define DZETA0 0.25     /* zeta step at level 0 */
+#define DZETA0_FWD 0.25 /* zeta step at level 0: forward solves (gap PDFs) */
+#define DZETA0_BWD 0.5  /* zeta step at level 0: backward solves (traction curves) */
 #define DXI0 0.02       /* relative grid spacing at level 0 */
 #define MAX_LEVEL 7     /* at most 2^7 times the level-0 resolution */
 #define MAX_STEPS 4e6   /* steps of one march, at most */
@@ -47,6 +48,12 @@
 #define G_LO_FLOOR 0.04 /* never put the lower end below this (or half the lowest gap asked) */
 #define G_LO_FACTOR 0.8 /* each lowering of the lower end */
 #define TAIL_STEPS0 8   /* tau steps of the infinite tail at level 0 (per unit m0 share) */
+/* The Richardson value R_L has no h^2 term; what is left falls by 2^p per level with p >= 3
+ * (the wavenumber steps contribute h^4, the gap grid h^4 and a little h^3; measured 3.5-4 on
+ * the stability cases), so |R_L - R_{L-1}| >= (2^3 - 1) err(R_L) once the levels are in the
+ * asymptotic range. The estimate |R_L - R_{L-1}| / 2 keeps a factor 3.5 for levels that are
+ * not yet there (bench/stability.c measures how often it holds). */
+#define RICH_ERR_DIV 2.0
 
 /* ---- the gap grid ---- */
 typedef struct {
@@ -168,9 +175,15 @@ static void march_free(pde_march *M)
 
 /* Build the steps of level L from k1 through the sorted cut points cuts[0..nc-1] (the
  * last one is the end of the march; INFINITY means the whole PSD). A snapshot index is
- * recorded at each cut. g_lo sets kmax for the infinite tail. */
+ * recorded at each cut. g_lo sets kmax for the infinite tail.
+ * Forward (gap PDFs): steps DZETA0_FWD / 2^L, the first two as four backward-Euler halves
+ * that damp the delta start. Backward (traction): steps DZETA0_BWD / 2^L, all
+ * Crank-Nicolson. The backward solve starts from the smooth sigma(g) at the far end and
+ * needs no damping; backward-Euler steps at k1 would add an h^3 term to its error expansion
+ * (measured: it made the Richardson values converge at order 3 instead of 3.5-4), and the
+ * longer steps are what its error balance allows (its error is mostly from the gap grid). */
 static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, size_t nc, int L,
-                      double g_lo)
+                      double g_lo, int backward)
 {
     memset(M, 0, sizeof *M);
     zeta_ctx z = {psd, ljgap_k0(), psd->m0};
@@ -187,7 +200,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     M->kmax = kmax;
     M->tau_rem = inf ? psd->m0 - ljgap_psd_cumvar(psd, kmax) : 0.0;
     double scale = ldexp(1.0, L);
-    double dz = DZETA0 / scale;
+    double dz = (backward ? DZETA0_BWD : DZETA0_FWD) / scale;
     /* Steps are uniform in zeta from zeta(k1), whatever the cuts: a cut ends a step early
      * (a remainder under 0.3 dz is merged into the step before). So the nodes do not move
      * when kmax moves (it follows g_lo), and level L+1 holds every node of level L. */
@@ -222,7 +235,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
             while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz)
                 jn++;
             double h = zn - zprev, rb = rate_of(&z, kb);
-            if (nreg++ < 2) {
+            if (!backward && nreg++ < 2) {
                 /* Rannacher start: each of the first two steps as two backward-Euler halves */
                 double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
                 double sm = 0.5 * h * rate_of(&z, km);
@@ -469,7 +482,7 @@ static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G,
     /* anchored at g_hi, so that a lower g_lo only adds nodes below */
     int st = grid_make(G, log(g_hi) - (double)n0 * DXI0, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, &cut, 1, L, g_lo);
+    st = march_make(&M, C->psd, &cut, 1, L, g_lo, 1);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
@@ -539,19 +552,23 @@ static int curve_at(pde_ctx *C, double g_lo, double g_hi, int L, const double *g
         st = LJGAP_ENOMEM;
         goto end;
     }
-    /* values at requested points: cubic through the four nearest nodes (Lagrange) */
+    /* values at requested points: degree 5 through the six nearest nodes (Lagrange in xi,
+     * where the nodes are uniform). Its error, O(dxi^6), changes with the point's place
+     * between the nodes from level to level, so it must stay far below the scheme's error
+     * (a cubic left ~1e-9 to 2e-8 that no extrapolation removes). */
+    static const double den[6] = {-120, 24, -12, 12, -24, 120}; /* prod_{b!=a} (a-b) */
     double xi0 = log(G.g[0]), dxi = log(G.g[1]) - xi0;
     for (size_t j = 0; j < n; j++) {
         double x = (log(g_ave[j]) - xi0) / dxi;
-        long i = (long)floor(x) - 1;
+        long i = (long)floor(x) - 2;
         if (i < 0) i = 0;
-        if (i > (long)G.n - 4) i = (long)G.n - 4;
-        double v = 0;
-        for (int a = 0; a < 4; a++) {
+        if (i > (long)G.n - 6) i = (long)G.n - 6;
+        double t = x - (double)i, v = 0;
+        for (int a = 0; a < 6; a++) {
             double l = 1;
-            for (int b = 0; b < 4; b++)
-                if (b != a) l *= (g_ave[j] - G.g[i + b]) / (G.g[i + a] - G.g[i + b]);
-            v += l * u[i + a];
+            for (int b = 0; b < 6; b++)
+                if (b != a) l *= t - b;
+            v += l / den[a] * u[i + a];
         }
         R->sig[j] = v;
     }
@@ -616,9 +633,9 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
             break;
         }
     }
-    /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 (second order, so
-     * R_L is fourth-order accurate); the error estimate of R_L is |R_L - R_{L-1}| (the error
-     * of the less accurate R_{L-1}: conservative), plus the lower-end change. */
+    /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 removes the h^2
+     * term, and R_L converges at order 3.5-4 (see RICH_ERR_DIV); the error estimate of R_L is
+     * |R_L - R_{L-1}| / RICH_ERR_DIV, plus the lower-end change. */
     double est = INFINITY;
     int L = 0, nR = 0;
     for (;;) {
@@ -653,12 +670,12 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
             sigma[j].err = fabs(A.sig[j] - B.sig[j]);
         /* now A = plain level L+1, B = Richardson at L+1 */
         if (nR > 0) {
-            est = curve_diff(&B, &P, want_sum) + trunc;
+            est = curve_diff(&B, &P, want_sum) / RICH_ERR_DIV + trunc;
             for (size_t j = 0; j < n; j++)
-                sigma[j].err = fabs(B.sig[j] - P.sig[j]);
+                sigma[j].err = fabs(B.sig[j] - P.sig[j]) / RICH_ERR_DIV;
             ljgap_est *p = &P.sum.g_eq;
             for (int q = 0; q < 4; q++)
-                x[q].err = fabs(x[q].value - p[q].value);
+                x[q].err = fabs(x[q].value - p[q].value) / RICH_ERR_DIV;
         } else {
             est = curve_diff(&B, &A, want_sum) + trunc;
         }
@@ -713,7 +730,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
     double *p = NULL;
     int st = grid_make(G, lx - (double)i0 * dxi, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, cuts, nc, L, g_lo);
+    st = march_make(&M, C->psd, cuts, nc, L, g_lo, 0);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
