@@ -32,6 +32,7 @@
  *    change is added to the error estimate.
  */
 #include "ljgap.h"
+#include "fold.h"
 #include "pde.h"
 
 #include <math.h>
@@ -141,12 +142,13 @@ static double rate_of(const zeta_ctx *z, double k)
 }
 
 /* The k in [ka,kb] with zeta(k) = target: safeguarded Newton in x = ln(k - k0), started at
- * ka (the march asks for the next node just above the previous one, and zeta is concave in
- * x for the usual spectra, so Newton from the left end converges in a few steps). */
-static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
+ * x0 when that lies inside, else at ka (the march asks for the next node just above the
+ * previous one, and zeta is concave in x for the usual spectra, so Newton from the left end
+ * converges in a few steps). */
+static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb, double x0)
 {
     double xa = log(ka - z->k0), xb = log(kb - z->k0);
-    double x = xa;
+    double x = x0 > xa && x0 < xb ? x0 : xa;
     for (int it = 0; it < 100; it++) {
         double k = z->k0 + exp(x);
         double r = zeta_of(z, k) - target;
@@ -166,6 +168,76 @@ static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
     return z->k0 + exp(x);
 }
 
+/* The regular nodes k_j = zeta^-1(zeta(k1) + j dz) of the marches of one request, with
+ * rate_of at them, at the finest spacing asked so far (entries not yet needed are NAN). A
+ * march of level L takes every 2^(finest - L)-th entry, since level L+1 holds every node of
+ * level L: the lower-end search and the refinement levels find each node once, and a node
+ * between two known ones starts Newton halfway between them. */
+typedef struct {
+    double dz;     /* spacing of the entries (0: none yet) */
+    size_t n;      /* entries */
+    double *k, *r; /* node and rate (one block) */
+} zeta_nodes;
+
+static void nodes_free(zeta_nodes *Z)
+{
+    free(Z->k);
+    memset(Z, 0, sizeof *Z);
+}
+
+/* Make entry j exist for spacing dz = Z->dz 2^p, p >= 0, or refine the table to spacing dz.
+ * Returns the entry's index, or -1 when out of memory. */
+static long nodes_slot(zeta_nodes *Z, double dz, size_t j)
+{
+    if (Z->dz == 0) Z->dz = dz;
+    while (dz < Z->dz * 0.75) { /* refine: the old entries become the even ones */
+        size_t n = 2 * Z->n;
+        double *b = malloc(2 * (n ? n : 1) * sizeof *b);
+        if (!b) return -1;
+        for (size_t i = 0; i < n; i++)
+            b[i] = b[n + i] = NAN;
+        for (size_t i = 0; i < Z->n; i++)
+            b[2 * i] = Z->k[i], b[n + 2 * i] = Z->r[i];
+        free(Z->k);
+        Z->k = b, Z->r = b + n, Z->n = n, Z->dz *= 0.5;
+    }
+    size_t p = (size_t)lround(dz / Z->dz), i = j * p;
+    if (i >= Z->n) { /* grow */
+        size_t n = 2 * i + 16;
+        double *b = malloc(2 * n * sizeof *b);
+        if (!b) return -1;
+        for (size_t q = 0; q < n; q++) {
+            b[q] = q < Z->n ? Z->k[q] : NAN;
+            b[n + q] = q < Z->n ? Z->r[q] : NAN;
+        }
+        free(Z->k);
+        Z->k = b, Z->r = b + n, Z->n = n;
+    }
+    return (long)i;
+}
+
+/* Regular node j of spacing dz above z1 = zeta(k1), with its rate; kprev is node j-1 (the
+ * march asks in order) and kc the end of the segment that holds the node. Z may be NULL. */
+static double nodes_get(zeta_nodes *Z, const zeta_ctx *z, double z1, double dz, size_t j,
+                        double kprev, double kc, double *rate)
+{
+    long i = Z ? nodes_slot(Z, dz, j) : -1;
+    if (i >= 0 && !isnan(Z->k[i])) {
+        *rate = Z->r[i];
+        return Z->k[i];
+    }
+    double x0 = -INFINITY;                                       /* (from kprev) */
+    if (i >= 0 && (size_t)i + 1 < Z->n && !isnan(Z->k[i + 1])) { /* bracketed */
+        double kn = Z->k[i + 1];
+        kc = fmin(kc, kn);
+        x0 = 0.5 * (log(kprev - z->k0) + log(kn - z->k0));
+    }
+    double k = zeta_inv(z, z1 + (double)j * dz, kprev, kc, x0);
+    *rate = rate_of(z, k);
+    if (i >= 0) Z->k[i] = k, Z->r[i] = *rate;
+    return k;
+}
+
 static void march_free(pde_march *M)
 {
     free(M->s);
@@ -175,7 +247,8 @@ static void march_free(pde_march *M)
 
 /* Build the steps of level L from k1 through the sorted cut points cuts[0..nc-1] (the
  * last one is the end of the march; INFINITY means the whole PSD). A snapshot index is
- * recorded at each cut. g_lo sets kmax for the infinite tail.
+ * recorded at each cut. For the infinite tail, kmax is where f(g_k, kmax) = 1/1.001 (g_k is
+ * the grid's lower end, or a lower one).
  * Forward (gap PDFs): steps DZETA0_FWD / 2^L, the first two as four backward-Euler halves
  * that damp the delta start. Backward (traction): steps DZETA0_BWD / 2^L, all
  * Crank-Nicolson. The backward solve starts from the smooth sigma(g) at the far end and
@@ -183,7 +256,7 @@ static void march_free(pde_march *M)
  * (measured: it made the Richardson values converge at order 3 instead of 3.5-4), and the
  * longer steps are what its error balance allows (its error is mostly from the gap grid). */
 static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, size_t nc, int L,
-                      double g_lo, int backward)
+                      double g_k, int backward, zeta_nodes *Z)
 {
     memset(M, 0, sizeof *M);
     zeta_ctx z = {psd, ljgap_k0(), psd->m0};
@@ -191,7 +264,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
     int inf = isinf(kend);
     double kmax = kend;
     if (inf) {
-        double kw = 1e3 * 9.0 * pow(g_lo, -10.0);
+        double kw = 1e3 * 9.0 * pow(g_k, -10.0);
         kmax = fmax(100.0 * psd->k1, kw);
         for (size_t c = 0; c + 1 < nc; c++)
             kmax = fmax(kmax, 10.0 * cuts[c]);
@@ -227,17 +300,19 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
         double zc = zeta_of(&z, kc);
         while (zprev < zc && m + 2 < cap) {
             double zn = z1 + (double)(jn + 1) * dz;
-            double kb;
-            if (zn >= zc - 0.3 * dz)
+            double kb, rb;
+            if (zn >= zc - 0.3 * dz) {
                 zn = zc, kb = kc;
-            else
-                kb = zeta_inv(&z, zn, kprev, kc);
+                rb = rate_of(&z, kb);
+            } else {
+                kb = nodes_get(Z, &z, z1, dz, (size_t)(jn + 1), kprev, kc, &rb);
+            }
             while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz)
                 jn++;
-            double h = zn - zprev, rb = rate_of(&z, kb);
+            double h = zn - zprev;
             if (!backward && nreg++ < 2) {
                 /* Rannacher start: each of the first two steps as two backward-Euler halves */
-                double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
+                double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb, -INFINITY);
                 double sm = 0.5 * h * rate_of(&z, km);
                 M->s[m++] = (pde_step){kprev, km, 0.5 * h * rprev, sm, 1.0, -1};
                 M->s[m++] = (pde_step){km, kb, sm, 0.5 * h * rb, 1.0, -1};
@@ -270,7 +345,7 @@ static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, si
 typedef struct {
     double *mem;                /* one block holding every array below */
     double *fa, *fb;            /* f^2 on the grid at the two ends of the current step */
-    double ka_cur, kb_cur;      /* which step fa, fb belong to (NAN: none) */
+    double kb_cur;              /* which step's upper end fb belongs to (NAN: none) */
     double *ca, *cb;            /* coefficients s*f^2 at the two ends of a step */
     double *dl, *dd, *du, *rhs; /* tridiagonal system */
     double *tmp;
@@ -291,7 +366,7 @@ static int work_alloc(pde_work *W, size_t n)
     for (int i = 0; i < 9; i++)
         *arr[i] = b + (size_t)i * n;
     W->mem = b;
-    W->ka_cur = W->kb_cur = NAN;
+    W->kb_cur = NAN;
     return LJGAP_OK;
 }
 
@@ -306,63 +381,6 @@ static void tridiag(size_t n, double *dl, double *dd, double *du, double *x)
     x[n - 1] /= dd[n - 1];
     for (size_t i = n - 1; i-- > 0;)
         x[i] = (x[i] - du[i] * x[i + 1]) / dd[i];
-}
-
-/* u <- S u for one step, S = (I - theta Ba)^-1 (I + (1-theta) Bb), B = s f(g,k)^2 D2.
- * W->fa/W->fb hold f^2 at the step's two ends; the caller keeps them current. */
-static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, double *u)
-{
-    size_t n = G->n;
-    const double *lo = G->lo, *hi = G->hi, *fa = W->fa, *fb = W->fb;
-    double th = st->theta, cb = (1.0 - th) * st->sb, ca = th * st->sa;
-    double *rhs = W->rhs;
-    /* boundary rows are frozen (lo = hi = 0 there) */
-    rhs[0] = u[0];
-    for (size_t i = 1; i + 1 < n; i++) {
-        double d2 = lo[i] * (u[i - 1] - u[i]) + hi[i] * (u[i + 1] - u[i]);
-        rhs[i] = u[i] + cb * fb[i] * d2;
-    }
-    rhs[n - 1] = u[n - 1];
-    /* Solve with dl_i = -c_i lo_i, du_i = -c_i hi_i, dd_i = 1 + c_i (lo_i + hi_i), c_i = ca f_i,
-     * eliminating from both ends towards a meeting row m (a twisted factorisation): the two
-     * division chains are independent, which roughly halves the latency-bound cost of the
-     * Thomas algorithm. Rows 0 and n-1 are frozen (c = 0). */
-    double *inv = W->tmp, *c = W->ca;
-    for (size_t i = 0; i < n; i++)
-        c[i] = ca * fa[i];
-    c[0] = c[n - 1] = 0;
-    size_t m = n / 2;
-    inv[0] = inv[n - 1] = 1.0;
-    for (size_t t = 1; t < m || n - 1 - t > m; t++) {
-        if (t < m) { /* top: row i minus (dl_i/d_{i-1}) row i-1 */
-            size_t i = t;
-            double wi = -c[i] * lo[i] * inv[i - 1];
-            rhs[i] -= wi * rhs[i - 1];
-            inv[i] = 1.0 / (1.0 + c[i] * (lo[i] + hi[i]) + wi * c[i - 1] * hi[i - 1]);
-        }
-        if (n - 1 - t > m) { /* bottom: row j minus (du_j/e_{j+1}) row j+1 */
-            size_t j = n - 1 - t;
-            double wj = -c[j] * hi[j] * inv[j + 1];
-            rhs[j] -= wj * rhs[j + 1];
-            inv[j] = 1.0 / (1.0 + c[j] * (lo[j] + hi[j]) + wj * c[j + 1] * lo[j + 1]);
-        }
-    }
-    /* the meeting row takes both eliminated neighbours */
-    double wl = -c[m] * lo[m] * inv[m - 1], wr = -c[m] * hi[m] * inv[m + 1];
-    double dm =
-        1.0 + c[m] * (lo[m] + hi[m]) + wl * c[m - 1] * hi[m - 1] + wr * c[m + 1] * lo[m + 1];
-    u[m] = (rhs[m] - wl * rhs[m - 1] - wr * rhs[m + 1]) / dm;
-    /* back substitution outwards along two chains */
-    for (size_t t = 1; t <= m || m + t < n; t++) {
-        if (t <= m) {
-            size_t i = m - t;
-            u[i] = (rhs[i] + c[i] * hi[i] * u[i + 1]) * inv[i];
-        }
-        if (m + t < n) {
-            size_t j = m + t;
-            u[j] = (rhs[j] + c[j] * lo[j] * u[j - 1]) * inv[j];
-        }
-    }
 }
 
 /* p <- S^T p: solve (I - theta Ba)^T y = p, then p = (I + (1-theta) Bb)^T y. */
@@ -409,27 +427,17 @@ static void fsq(const pde_grid *G, double k, double *f2)
     }
 }
 
-/* Make W->fa/W->fb hold f^2 at the ends of step st, reusing the other array when the
- * march moves by one node (forward: new fa = old fb; backward: new fb = old fa). */
-static void fsq_step(const pde_grid *G, pde_work *W, const pde_step *st, int forward)
+/* Make W->fa/W->fb hold f^2 at the ends of step st, reusing the previous step's upper end
+ * when the march moves on by one node. */
+static void fsq_step(const pde_grid *G, pde_work *W, const pde_step *st)
 {
-    double *t;
-    if (forward) {
-        if (W->kb_cur == st->ka) {
-            t = W->fa, W->fa = W->fb, W->fb = t;
-        } else {
-            fsq(G, st->ka, W->fa);
-        }
-        fsq(G, st->kb, W->fb);
+    if (W->kb_cur == st->ka) {
+        double *t = W->fa;
+        W->fa = W->fb, W->fb = t;
     } else {
-        if (W->ka_cur == st->kb) {
-            t = W->fb, W->fb = W->fa, W->fa = t;
-        } else {
-            fsq(G, st->kb, W->fb);
-        }
         fsq(G, st->ka, W->fa);
     }
-    W->ka_cur = st->ka;
+    fsq(G, st->kb, W->fb);
     W->kb_cur = st->kb;
 }
 
@@ -459,7 +467,8 @@ typedef struct {
     const ljgap_psd *psd;
     const ljgap_opts *o;
     double deadline;
-    long work; /* grid points x steps spent */
+    long work;        /* grid points x steps spent */
+    zeta_nodes nodes; /* the march nodes found so far */
 } pde_ctx;
 
 /* Which cap stopped a computation, for the warnings. */
@@ -468,57 +477,61 @@ static const char *cap_reason(const pde_ctx *C)
     return ljgap_now() > C->deadline ? "time cap (max_seconds)" : "work cap (max_work)";
 }
 
-/* Backward solve: u on the grid of level L between ln g_lo and ln g_hi. */
-static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G, double **uout)
+/* Backward solve: u on the grid of level L between ln g_lo and ln g_hi (fold.c steps); the
+ * march's end follows g_k <= g_lo (see march_make). */
+static int solve_curve(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, pde_grid *G,
+                       double **uout)
 {
     double dxi = DXI0 / ldexp(1.0, L);
     size_t n0 = (size_t)ceil(log(g_hi / g_lo) / DXI0);
+    n0 += n0 % 2; /* an odd number of nodes at every level (fold.c) */
     size_t n = n0 * ((size_t)1 << L) + 1;
     double cut = INFINITY;
     if (isfinite(C->psd->k2)) cut = C->psd->k2;
-    pde_march M;
-    pde_work W = {0};
+    pde_march M = {0};
+    ljgap__fold F = {0};
     double *u = NULL;
     /* anchored at g_hi, so that a lower g_lo only adds nodes below */
     int st = grid_make(G, log(g_hi) - (double)n0 * DXI0, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, &cut, 1, L, g_lo, 1);
+    st = march_make(&M, C->psd, &cut, 1, L, g_k, 1, &C->nodes);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
-        goto fail_m;
+        goto fail;
     }
-    st = work_alloc(&W, n);
-    if (st) goto fail_m;
+    st = ljgap__fold_make(&F, n, G->A, G->lo, G->hi);
+    if (st) goto fail;
     u = malloc(n * sizeof *u);
     if (!u) {
         st = LJGAP_ENOMEM;
-        goto fail_m;
+        goto fail;
     }
     for (size_t i = 0; i < n; i++)
         u[i] = ljgap_sigma(G->g[i]);
+    ljgap__fold_put(&F, u, F.x);
     for (size_t j = M.m; j-- > 0;) {
-        fsq_step(G, &W, &M.s[j], 0);
-        step_backward(G, &W, &M.s[j], u);
+        const pde_step *s = &M.s[j];
+        ljgap__fold_back(&F, s->ka, s->kb, s->theta * s->sa, (1.0 - s->theta) * s->sb);
         if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
             st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
-            goto fail_m;
+            goto fail;
         }
     }
     C->work += (long)(n * M.m);
+    ljgap__fold_get(&F, F.x, u);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(u[i])) {
             st = LJGAP_EFAIL;
-            goto fail_m;
+            goto fail;
         }
-    work_free(&W);
+    ljgap__fold_free(&F);
     march_free(&M);
     *uout = u;
     return LJGAP_OK;
-fail_m:
-    march_free(&M);
 fail:
-    work_free(&W);
+    march_free(&M);
+    ljgap__fold_free(&F);
     free(u);
     grid_free(G);
     return st;
@@ -538,13 +551,13 @@ static void curve_result_free(curve_result *r)
     r->sig = NULL;
 }
 
-static int curve_at(pde_ctx *C, double g_lo, double g_hi, int L, const double *g_ave, size_t n,
-                    curve_result *R, ljgap_warnings *w)
+static int curve_at(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, const double *g_ave,
+                    size_t n, curve_result *R, ljgap_warnings *w)
 {
     pde_grid G;
     double *u = NULL;
     memset(R, 0, sizeof *R);
-    int st = solve_curve(C, g_lo, g_hi, L, &G, &u);
+    int st = solve_curve(C, g_lo, g_k, g_hi, L, &G, &u);
     if (st) return st;
     R->n = n;
     R->sig = malloc((n ? n : 1) * sizeof(double));
@@ -597,7 +610,7 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
 int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
-    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
     double gmin = 1.0, gmax = 1.0;
     for (size_t j = 0; j < n; j++)
         gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
@@ -611,12 +624,15 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     int st;
     double trunc = 0; /* error from the lower end */
 
-    /* lower the lower end until the level-0 answer stops changing */
-    st = curve_at(&C, g_lo, g_hi, 0, g_ave, n, &A, w);
-    if (st) return st;
+    /* Lower the lower end until the level-0 answer stops changing. The two solves compared
+     * share the march (its end follows the lower of the two ends), so that their difference
+     * is what the grid's end does and not a change of the level-0 discretisation (which
+     * alone is ~1e-7 for Fig. 4 and would ask for needless lowerings). */
+    st = curve_at(&C, g_lo, g_lo * G_LO_FACTOR, g_hi, 0, g_ave, n, &A, w);
+    if (st) goto end;
     for (;;) {
         double g2 = g_lo * G_LO_FACTOR;
-        st = curve_at(&C, g2, g_hi, 0, g_ave, n, &B, w);
+        st = curve_at(&C, g2, g2, g_hi, 0, g_ave, n, &B, w);
         if (st) goto end;
         double d = curve_diff(&A, &B, want_sum);
         curve_result_free(&A);
@@ -632,6 +648,10 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
                        g_lo, d);
             break;
         }
+        /* the next comparison's upper solve: this end, the next end's march */
+        curve_result_free(&A);
+        st = curve_at(&C, g_lo, g_lo * G_LO_FACTOR, g_hi, 0, g_ave, n, &A, w);
+        if (st) goto end;
     }
     /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 removes the h^2
      * term, and R_L converges at order 3.5-4 (see RICH_ERR_DIV); the error estimate of R_L is
@@ -639,7 +659,7 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     double est = INFINITY;
     int L = 0, nR = 0;
     for (;;) {
-        st = curve_at(&C, g_lo, g_hi, L + 1, g_ave, n, &B, w);
+        st = curve_at(&C, g_lo, g_lo, g_hi, L + 1, g_ave, n, &B, w);
         if (st == LJGAP_ECAP && L > 0) {
             ljgap_warn(w,
                        "%s reached at resolution level %d: the error estimate is above the "
@@ -707,6 +727,7 @@ end:
     curve_result_free(&A);
     curve_result_free(&B);
     curve_result_free(&P);
+    nodes_free(&C.nodes);
     return st;
 }
 
@@ -730,7 +751,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
     double *p = NULL;
     int st = grid_make(G, lx - (double)i0 * dxi, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, cuts, nc, L, g_lo, 0);
+    st = march_make(&M, C->psd, cuts, nc, L, g_lo, 0, &C->nodes);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
@@ -747,7 +768,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
         snaps[c] = NULL;
     p[i0] = 1.0;
     for (size_t j = 0; j < M.m; j++) {
-        fsq_step(G, &W, &M.s[j], 1);
+        fsq_step(G, &W, &M.s[j]);
         step_forward(G, &W, &M.s[j], p);
         if (M.s[j].snap >= 0) {
             double *s = malloc(n * sizeof *s);
@@ -824,7 +845,7 @@ static double snap_sigma(const pde_grid *G, const double *p)
 int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                   size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
-    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
     /* march through the cuts in increasing order; out[] keeps the request's order */
     size_t *ord = malloc((nk2 ? nk2 : 1) * sizeof *ord);
     double *cuts = malloc((nk2 ? nk2 : 1) * sizeof *cuts);
@@ -1026,6 +1047,7 @@ end:
     pdf_level_free(&B, nk2);
     free(ord);
     free(cuts);
+    nodes_free(&C.nodes);
     return st;
 }
 
@@ -1034,9 +1056,10 @@ int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, i
 {
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
     curve_result R;
-    int st = curve_at(&C, g_lo, g_hi, level, NULL, 0, &R, NULL);
+    int st = curve_at(&C, g_lo, g_lo, g_hi, level, NULL, 0, &R, NULL);
+    nodes_free(&C.nodes);
     if (st) return st;
     *sum = R.sum;
     st = R.sum_ok ? LJGAP_OK : LJGAP_EFAIL;
@@ -1051,11 +1074,12 @@ int ljgap_pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double
         return LJGAP_EINVAL;
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
     double cut = fmin(k2, psd->k2);
     pdf_level P = {0};
     memset(out, 0, sizeof *out);
     int st = pdf_level_run(&C, g_ave, g_lo, g_hi, &cut, 1, level, &P);
+    nodes_free(&C.nodes);
     if (st) return st;
     const pde_grid *G = &P.G;
     out->k2 = k2;
