@@ -18,15 +18,20 @@
  *  - Wavenumber: Crank-Nicolson steps uniform in zeta(k) = ln(k - k0) + beta tau(k)/m0,
  *    where tau is the cumulative variance: ln(k - k0) puts steps where f changes fast
  *    (stiff starts with k1 near k0, the near-wall switch-on at large k, which a march in
- *    tau alone misses: theory.md §3) and tau where the variance is. The first two steps
- *    at k1 are four backward-Euler half steps (Rannacher), which damps the delta start.
+ *    tau alone misses: theory.md §3) and tau where the variance is. Forward solves: steps
+ *    DZETA0_FWD at level 0, the first two at k1 as four backward-Euler half steps
+ *    (Rannacher), which damps the delta start. Backward solves: steps DZETA0_BWD, all
+ *    Crank-Nicolson (their start, sigma(g) at the far end, is smooth), done by fold.c.
  *  - Infinite k2: march to kmax where f(g_lo,kmax) ≈ 1 on the whole grid, then add the
  *    remaining variance m0 - tau(kmax) in steps uniform in tau with a = f^2/2 per unit tau
  *    at k(tau): for D near 3 that tail is not small, and f is not yet 1 near the wall.
  *  - Resolution levels L = 0,1,2,... halve dxi and every step; level L+1 contains the nodes
- *    of level L, so Richardson extrapolation (second order, checked by the tests) gives the
- *    value and |v(L+1) - v(L)|/3 the error estimate. Levels rise until the estimate is
- *    below tol*max(1,|v|) or the work cap is reached (then a warning says so).
+ *    of level L (the march's nodes are found once per request: zeta_nodes). Richardson
+ *    extrapolation R_L = v_L + (v_L - v_{L-1})/3 removes the h^2 term (second order,
+ *    checked by the tests). The error estimate of R_L is |R_L - R_{L-1}|/2 for tractions
+ *    (RICH_ERR_DIV), |R_L - R_{L-1}| for gap PDFs (whose backward-Euler start leaves an h^3
+ *    term). Levels rise until the estimate is below tol*max(1,|v|) or a cap is reached (then a
+ *    warning says so).
  *  - Lower grid end: where paths freeze depends on the spectrum (theory.md §3), so it is
  *    lowered until moving it once more changes the answer by less than the tolerance; that
  *    change is added to the error estimate.
