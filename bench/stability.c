@@ -14,8 +14,9 @@
  *
  * Cases (power laws (6); the rest as Fig. 4: D = 2.5, k1 = 1, k2 = ∞, m0 = 0.5):
  *   k1 from just above k0 = 0.469779 to 0.6; D from 2.01 to 2.99; m0 from 1e-6 to 100; k2
- *   right above k1 and very large (up to LJGAP_K_MAX); the traction at g_ave deep in
- *   compression (down to LJGAP_G_MIN) and far out (up to LJGAP_G_MAX).
+ *   right above k1, moderate (5 and 8: the figures' spectra) and very large (up to
+ *   LJGAP_K_MAX); the traction at g_ave deep in compression (down to LJGAP_G_MIN) and far
+ *   out (up to LJGAP_G_MAX).
  */
 #include "bench.h"
 #include "ljgap.h"
@@ -56,6 +57,9 @@ static const stab_case cases[] = {
     {"k2_near_k1", 2.5, 1, 1.000001, 0.5, NAN},
     {"k2_near_k1", 2.5, 1, 1.001, 0.5, NAN},
     {"k2_near_k1", 2.5, 1, 1.1, 0.5, NAN},
+    {"k2_mid", 2.5, 1, 5, 0.4, NAN}, /* the Fig. 2 spectrum */
+    {"k2_mid", 2.5, 1, 8, 0.5, NAN}, /* the handler tests' */
+    {"k2_mid", 2.2, 1, 8, 0.1, NAN}, /* the Fig. 6 spectrum */
     {"k2_large", 2.5, 1, 1e6, 0.5, NAN},
     {"k2_large", 2.5, 1, 1e10, 0.5, NAN},
     {"k2_large", 2.5, 1, 1e15, 0.5, NAN},
