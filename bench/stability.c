@@ -17,6 +17,9 @@
  *   right above k1, moderate (5 and 8: the figures' spectra) and very large (up to
  *   LJGAP_K_MAX); the traction at g_ave deep in compression (down to LJGAP_G_MIN) and far
  *   out (up to LJGAP_G_MAX).
+ * Then a sweep of 108 spectra, every combination of D 2.2/2.5/2.8, k1 0.5/1/3, k2/k1
+ * 2/8/50/∞ and m0 0.1/0.5/2 (the adhesion summary): ordinary inputs, where a term that the
+ * extrapolation does not remove would show.
  */
 #include "bench.h"
 #include "ljgap.h"
@@ -73,6 +76,21 @@ static const stab_case cases[] = {
     {"g_far", 2.5, 1, INFINITY, 0.5, 1e6},
 };
 #define NCASE (sizeof cases / sizeof cases[0])
+
+/* The sweep: every combination of these (k2 as a multiple of k1), the adhesion summary. */
+static const double sweep_D[] = {2.2, 2.5, 2.8}, sweep_k1[] = {0.5, 1, 3},
+                    sweep_k2[] = {2, 8, 50, INFINITY}, sweep_m0[] = {0.1, 0.5, 2};
+#define NSWEEP 108 /* 3 x 3 x 4 x 3 */
+
+/* Case c of the list, then of the sweep. */
+static stab_case case_at(size_t c)
+{
+    if (c < NCASE) return cases[c];
+    c -= NCASE;
+    double k1 = sweep_k1[c / 12 % 3];
+    return (stab_case){"sweep", sweep_D[c / 36], k1, k1 * sweep_k2[c / 3 % 4], sweep_m0[c % 3],
+                       NAN};
+}
 
 static const char *qname[NQ] = {"g_eq", "sigma_max", "g_at_max", "dgamma_eff"};
 
@@ -131,11 +149,11 @@ int main(int argc, char **argv)
     }
     fprintf(f, "case,D,k1,k2,m0,g_ave,quantity,value,est_err,actual_err,ratio,ref_err,"
                "decisive,elapsed_ms,ref_elapsed_ms,warnings\n");
-    double ratio[NCASE * NQ];
+    static double ratio[(NCASE + NSWEEP) * NQ];
     int nr = 0, nrow = 0, dishonest = 0;
     static char bad[8192]; /* the rows with actual > estimate, listed at the end */
-    for (size_t c = 0; c < NCASE; c++) {
-        const stab_case *K = &cases[c];
+    for (size_t c = 0; c < NCASE + NSWEEP; c++) {
+        const stab_case KC = case_at(c), *K = &KC;
         stab_run A, B;
         memset(&A, 0, sizeof A);
         A.c = K;
