@@ -78,10 +78,16 @@ void ljgap__nodes_free(zeta_nodes *Z)
 }
 
 /* Make entry j exist for spacing dz = Z->dz 2^p, p >= 0, or refine the table to spacing dz.
- * Returns the entry's index, or -1 when out of memory. */
+ * Returns the entry's index, or -1 when out of memory (then the caller finds the node itself). */
 static long nodes_slot(zeta_nodes *Z, double dz, size_t j)
 {
-    if (Z->dz == 0) Z->dz = dz;
+    /* a spacing that is not the table's times or over a power of two (not a level of the
+     * same march) starts a new table */
+    double ratio = Z->n ? dz / Z->dz : 0, p2 = exp2(round(log2(ratio)));
+    if (!Z->n || !(fabs(ratio - p2) <= 1e-9 * p2)) {
+        ljgap__nodes_free(Z);
+        Z->dz = dz;
+    }
     while (dz < Z->dz * 0.75) { /* refine: the old entries become the even ones */
         size_t n = 2 * Z->n;
         double *b = malloc(2 * (n ? n : 1) * sizeof *b);
