@@ -83,8 +83,8 @@ static long nodes_slot(zeta_nodes *Z, double dz, size_t j)
 {
     /* a spacing that is not the table's times or over a power of two (not a level of the
      * same march) starts a new table */
-    double ratio = Z->n ? dz / Z->dz : 0, p2 = exp2(round(log2(ratio)));
-    if (!Z->n || !(fabs(ratio - p2) <= 1e-9 * p2)) {
+    if (!Z->n || (dz != Z->dz &&
+                  !(fabs(dz / Z->dz - exp2(round(log2(dz / Z->dz)))) <= 1e-9 * (dz / Z->dz)))) {
         ljgap__nodes_free(Z);
         Z->dz = dz;
     }
