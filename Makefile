@@ -2,7 +2,8 @@
 #   make            build the library, the CLI build/ljgap and the daemon build/ljgapd
 #   make test       install what is missing, build, run every test (last line: tests: N passed, N failed)
 #   make run        install what is missing, build, serve on $(PORT) with the page from web/
-#   make bench      build and run the benchmarks (writes bench/results/)
+#   make bench      build and run the benchmarks (writes bench/results/); BENCH="speed errtime"
+#                   runs only those
 #   make deps       install missing Debian packages (apt-get)
 #   SANITIZE=address,undefined   sanitizer build in build/san/
 #   V=1             show commands
@@ -150,7 +151,7 @@ run: check-deps
 
 bench: check-deps
 	@$(MAKE) --no-print-directory all
-	@BUILD=$(BUILD) bench/run.sh
+	@BUILD=$(BUILD) bench/run.sh $(BENCH)
 
 format:
 	clang-format -i include/*.h core/*.c server/*.c server/*.h server/ljgapd/*.[ch] \

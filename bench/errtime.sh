@@ -35,7 +35,7 @@ panel() { # quantity, title, y label, then the four ladders' descriptions
     echo 'set key below; set xlabel "elapsed time per computation (ms, median)"'
     echo "set multiplot layout 1,2 title \"ljgap: error against run time ($(date -u +%Y-%m-%d), $(nproc) shared cores)\""
     panel dgamma "Fig. 4 case: Δγeff/Δγ, absolute error" "|Δγeff - reference|" \
-        "one level, L = 0..6" "tol 1e-6..1e-9" "one level, Vmax = 1/25..1/3200" "250..4000 paths, RMS of 3 seeds"
+        "one level, L = 0..7" "tol 1e-6..1e-9" "one level, Vmax = 1/25..1/3200" "250..4000 paths, RMS of 3 seeds"
     panel pdf "Fig. 2 case: gap PDF at g_{ave} = 0.98, k_2 = 5, L1 error" "∫|Φ - Φ_{ref}| dg" \
         "one level, L = 0..7" "tol 1e-4..1e-6" "one level, Vmax = 1/10..1/5120" "1e3..2.6e5 paths, RMS of 3 seeds"
     echo 'unset multiplot'

@@ -14,8 +14,12 @@
  *
  * Cases (power laws (6); the rest as Fig. 4: D = 2.5, k1 = 1, k2 = ∞, m0 = 0.5):
  *   k1 from just above k0 = 0.469779 to 0.6; D from 2.01 to 2.99; m0 from 1e-6 to 100; k2
- *   right above k1 and very large (up to LJGAP_K_MAX); the traction at g_ave deep in
- *   compression (down to LJGAP_G_MIN) and far out (up to LJGAP_G_MAX).
+ *   right above k1, moderate (5 and 8: the figures' spectra) and very large (up to
+ *   LJGAP_K_MAX); the traction at g_ave deep in compression (down to LJGAP_G_MIN) and far
+ *   out (up to LJGAP_G_MAX).
+ * Then a sweep of 108 spectra, every combination of D 2.2/2.5/2.8, k1 0.5/1/3, k2/k1
+ * 2/8/50/∞ and m0 0.1/0.5/2 (the adhesion summary): ordinary inputs, where a term that the
+ * extrapolation does not remove would show.
  */
 #include "bench.h"
 #include "ljgap.h"
@@ -56,6 +60,9 @@ static const stab_case cases[] = {
     {"k2_near_k1", 2.5, 1, 1.000001, 0.5, NAN},
     {"k2_near_k1", 2.5, 1, 1.001, 0.5, NAN},
     {"k2_near_k1", 2.5, 1, 1.1, 0.5, NAN},
+    {"k2_mid", 2.5, 1, 5, 0.4, NAN}, /* the Fig. 2 spectrum */
+    {"k2_mid", 2.5, 1, 8, 0.5, NAN}, /* the handler tests' */
+    {"k2_mid", 2.2, 1, 8, 0.1, NAN}, /* the Fig. 6 spectrum */
     {"k2_large", 2.5, 1, 1e6, 0.5, NAN},
     {"k2_large", 2.5, 1, 1e10, 0.5, NAN},
     {"k2_large", 2.5, 1, 1e15, 0.5, NAN},
@@ -69,6 +76,21 @@ static const stab_case cases[] = {
     {"g_far", 2.5, 1, INFINITY, 0.5, 1e6},
 };
 #define NCASE (sizeof cases / sizeof cases[0])
+
+/* The sweep: every combination of these (k2 as a multiple of k1), the adhesion summary. */
+static const double sweep_D[] = {2.2, 2.5, 2.8}, sweep_k1[] = {0.5, 1, 3},
+                    sweep_k2[] = {2, 8, 50, INFINITY}, sweep_m0[] = {0.1, 0.5, 2};
+#define NSWEEP 108 /* 3 x 3 x 4 x 3 */
+
+/* Case c of the list, then of the sweep. */
+static stab_case case_at(size_t c)
+{
+    if (c < NCASE) return cases[c];
+    c -= NCASE;
+    double k1 = sweep_k1[c / 12 % 3];
+    return (stab_case){"sweep", sweep_D[c / 36], k1, k1 * sweep_k2[c / 3 % 4], sweep_m0[c % 3],
+                       NAN};
+}
 
 static const char *qname[NQ] = {"g_eq", "sigma_max", "g_at_max", "dgamma_eff"};
 
@@ -127,11 +149,11 @@ int main(int argc, char **argv)
     }
     fprintf(f, "case,D,k1,k2,m0,g_ave,quantity,value,est_err,actual_err,ratio,ref_err,"
                "decisive,elapsed_ms,ref_elapsed_ms,warnings\n");
-    double ratio[NCASE * NQ];
+    static double ratio[(NCASE + NSWEEP) * NQ];
     int nr = 0, nrow = 0, dishonest = 0;
     static char bad[8192]; /* the rows with actual > estimate, listed at the end */
-    for (size_t c = 0; c < NCASE; c++) {
-        const stab_case *K = &cases[c];
+    for (size_t c = 0; c < NCASE + NSWEEP; c++) {
+        const stab_case KC = case_at(c), *K = &KC;
         stab_run A, B;
         memset(&A, 0, sizeof A);
         A.c = K;

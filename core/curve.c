@@ -5,10 +5,11 @@
  *   sigma_max   the largest mean traction (the pull-off traction), and g_at_max where it is;
  *   dgamma_eff  the work of separation from g_eq to infinity (the shaded area of Fig. 4),
  *               over the flat value 9√3/16.
- * The curve is interpolated by a cubic spline (fourth-order accurate on smooth data), the
- * root and the maximum are found on the spline (so neither is tied to a grid point), and
- * the area beyond the last sample is E[∫_{G+X}^∞ sigma] with X ~ N(0, m0_tail): far from
- * the wall the gap transfer is f ≈ 1 and the mean traction is the blurred L-J law.
+ * The root and the maximum are found on a local interpolating polynomial of degree 9 (so
+ * neither is tied to a grid point, and the interpolation error is far below the solvers'),
+ * the area on a cubic spline (fourth-order accurate on smooth data) from the root to the last
+ * sample, and beyond it as E[∫_{G+X}^∞ sigma] with X ~ N(0, m0_tail): far from the wall the gap
+ * transfer is f ≈ 1 and the mean traction is the blurred L-J law.
  */
 #include "ljgap.h"
 
@@ -17,46 +18,67 @@
 #include <gsl/gsl_spline.h>
 #include <math.h>
 
+/* The natural spline's end condition (u'' = 0) is wrong by O(h^2) at the window's first
+ * node, and that error falls by 2 - √3 ≈ 0.27 per node inwards: 12 nodes put it below 1.5e-7
+ * of its size at the root. With 4 it left a term that jumps with the root's place between
+ * the nodes, ~6e-8 in g_eq of Fig. 4, which no refinement removes. */
+#define SPLINE_LEAD 12
+/* Nodes of the local interpolant for the root and the maximum (degree LOCAL_N - 1). Its error
+ * also jumps with the root's or maximum's place between the nodes, so it must stay far below
+ * the solvers' discretisation error: with six nodes the location of a sharp maximum (m0 = 0.1)
+ * was off by 1.8e-6 at the PDE's level 1, which Richardson extrapolation carried into its
+ * level-2 value as 5e-7 (its estimate said 1.7e-7). With ten, the error falls by h^10. */
+#define LOCAL_N 10
+
+/* The polynomial through LOCAL_N consecutive samples, in Newton form. */
 typedef struct {
-    gsl_spline *sp;
-    gsl_interp_accel *acc;
-    int deriv;             /* 0: the curve, 1: its derivative, 2: derivative of the local poly */
-    const double *px, *py; /* local polynomial: POLY_N nodes */
-} spline_fn;
+    double x[LOCAL_N]; /* nodes */
+    double c[LOCAL_N]; /* divided differences */
+} local_poly;
 
-#define POLY_N 6 /* degree-5 local interpolation for the maximum */
-
-/* Derivative at x of the Lagrange polynomial through (px[a], py[a]), a < POLY_N. */
-static double poly_deriv(const double *px, const double *py, double x)
+/* The interpolant through the samples i0 .. i0 + LOCAL_N - 1, i0 clamped to the data. */
+static void local_make(local_poly *P, const double *g, const double *u, size_t n, long i0)
 {
-    double d = 0;
-    for (int a = 0; a < POLY_N; a++) {
-        double den = 1, sum = 0;
-        for (int b = 0; b < POLY_N; b++)
-            if (b != a) den *= px[a] - px[b];
-        for (int c = 0; c < POLY_N; c++) {
-            if (c == a) continue;
-            double prod = 1;
-            for (int b = 0; b < POLY_N; b++)
-                if (b != a && b != c) prod *= x - px[b];
-            sum += prod;
-        }
-        d += py[a] * sum / den;
+    if (i0 > (long)n - LOCAL_N) i0 = (long)n - LOCAL_N;
+    if (i0 < 0) i0 = 0;
+    for (int a = 0; a < LOCAL_N; a++) {
+        P->x[a] = g[i0 + a];
+        P->c[a] = u[i0 + a];
     }
-    return d;
+    for (int k = 1; k < LOCAL_N; k++)
+        for (int a = LOCAL_N - 1; a >= k; a--)
+            P->c[a] = (P->c[a] - P->c[a - 1]) / (P->x[a] - P->x[a - k]);
 }
 
-static double spline_eval(double x, void *p)
+/* The interpolant's value (deriv 0) or derivative (deriv 1) at t. */
+static double local_eval(const local_poly *P, double t, int deriv)
 {
-    spline_fn *s = p;
-    if (s->deriv == 2) return poly_deriv(s->px, s->py, x);
-    return s->deriv ? gsl_spline_eval_deriv(s->sp, x, s->acc) : gsl_spline_eval(s->sp, x, s->acc);
+    double p = P->c[LOCAL_N - 1], dp = 0;
+    for (int a = LOCAL_N - 2; a >= 0; a--) {
+        dp = dp * (t - P->x[a]) + p;
+        p = p * (t - P->x[a]) + P->c[a];
+    }
+    return deriv ? dp : p;
 }
 
-/* Root of fn in [a,b] (a sign change is known to be there). */
-static double brent_root(spline_fn *s, double a, double b)
+static double local_value(double t, void *p)
 {
-    gsl_function F = {spline_eval, s};
+    return local_eval(p, t, 0);
+}
+
+static double local_slope(double t, void *p)
+{
+    return local_eval(p, t, 1);
+}
+
+static double spline_slope(double t, void *p)
+{
+    return gsl_spline_eval_deriv(p, t, NULL);
+}
+
+/* Root of F in [a,b] (a sign change is known to be there). */
+static double brent_root(gsl_function F, double a, double b)
+{
     gsl_root_fsolver *r = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
     if (!r) return NAN;
     double x = 0.5 * (a + b);
@@ -78,7 +100,7 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
     out->m0 = m0_tail;
     out->k0 = ljgap_k0();
     out->g_eq = out->sigma_max = out->g_at_max = out->dgamma_eff = (ljgap_est){NAN, 0};
-    if (n < 6) return LJGAP_EFAIL;
+    if (n < LOCAL_N) return LJGAP_EFAIL;
     /* the tensile maximum: the largest sample */
     size_t im = 0;
     for (size_t i = 1; i < n; i++)
@@ -97,38 +119,29 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
         return LJGAP_EFAIL;
     }
     j--; /* u[j] <= 0 < u[j+1] */
-    /* spline on a window that starts a few points left of the root, away from the
-     * steep wall values */
-    size_t s0 = j >= 4 ? j - 4 : 0;
-    size_t m = n - s0;
+    /* the root: on the local interpolant through the nodes around [g_j, g_j+1] */
+    local_poly P;
+    local_make(&P, g, u, n, (long)j - LOCAL_N / 2 + 1);
+    double geq = u[j] == 0 ? g[j] : brent_root((gsl_function){local_value, &P}, g[j], g[j + 1]);
+    /* the maximum: zero of the local interpolant's derivative, with nodes centred on the side
+     * of the largest sample where it lies (of the spline's if that has no sign change) */
     int st = LJGAP_EFAIL;
-    spline_fn S = {gsl_spline_alloc(gsl_interp_cspline, m), gsl_interp_accel_alloc(), 0, NULL,
-                   NULL};
-    if (!S.sp || !S.acc || gsl_spline_init(S.sp, g + s0, u + s0, m) != GSL_SUCCESS) goto end;
-
-    double geq = u[j] == 0 ? g[j] : brent_root(&S, g[j], g[j + 1]);
-    /* maximum: zero of the derivative near the largest sample */
-    double a = g[im - 1 >= s0 ? im - 1 : s0], b = g[im + 1];
-    double gm = g[im];
-    S.deriv = 1;
-    double da = spline_eval(a, &S), db = spline_eval(b, &S);
-    if (da > 0 && db < 0) gm = brent_root(&S, a, b);
-    /* The spline's derivative is only third-order accurate between nodes; the location of a
-     * flat maximum inherits that. A degree-5 polynomial through the six nearest nodes
-     * makes it fifth order. */
-    if (im >= 3 && im + 3 < n) {
-        size_t p0 = gm < g[im] ? im - 3 : im - 2;
-        S.px = g + p0;
-        S.py = u + p0;
-        S.deriv = 2;
-        if (spline_eval(a, &S) > 0 && spline_eval(b, &S) < 0) gm = brent_root(&S, a, b);
-    }
-    S.deriv = 0;
-    double smax = spline_eval(gm, &S);
+    size_t s0 = j >= SPLINE_LEAD ? j - SPLINE_LEAD : 0, m = n - s0;
+    gsl_spline *sp = gsl_spline_alloc(gsl_interp_cspline, m);
+    if (!sp || gsl_spline_init(sp, g + s0, u + s0, m) != GSL_SUCCESS) goto end;
+    local_make(&P, g, u, n, (long)im - LOCAL_N / 2 + (u[im + 1] >= u[im - 1]));
+    double a = g[im - 1], b = g[im + 1], gm = g[im];
+    if (local_slope(a, &P) > 0 && local_slope(b, &P) < 0)
+        gm = brent_root((gsl_function){local_slope, &P}, a, b);
+    else if (a >= g[s0] && spline_slope(a, sp) > 0 && spline_slope(b, sp) < 0)
+        gm = brent_root((gsl_function){spline_slope, sp}, a, b);
+    double smax = local_value(gm, &P);
     if (smax < u[im]) smax = u[im], gm = g[im];
 
     double G = g[n - 1];
-    double area = gsl_spline_eval_integ(S.sp, geq, G, S.acc);
+    /* the area: the spline's integral (its window starts SPLINE_LEAD nodes left of the root,
+     * away from the steep wall values) */
+    double area = gsl_spline_eval_integ(sp, geq, G, NULL);
     double tail = ljgap_sigma_work_smoothed(G, m0_tail);
     if (!isfinite(tail)) {
         ljgap_warn(w,
@@ -145,7 +158,6 @@ int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_ta
              ? LJGAP_OK
              : LJGAP_EFAIL;
 end:
-    gsl_spline_free(S.sp);
-    gsl_interp_accel_free(S.acc);
+    gsl_spline_free(sp);
     return st;
 }

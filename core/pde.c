@@ -18,35 +18,44 @@
  *  - Wavenumber: Crank-Nicolson steps uniform in zeta(k) = ln(k - k0) + beta tau(k)/m0,
  *    where tau is the cumulative variance: ln(k - k0) puts steps where f changes fast
  *    (stiff starts with k1 near k0, the near-wall switch-on at large k, which a march in
- *    tau alone misses: theory.md §3) and tau where the variance is. The first two steps
- *    at k1 are four backward-Euler half steps (Rannacher), which damps the delta start.
+ *    tau alone misses: theory.md §3) and tau where the variance is (march.c). Forward
+ *    solves: steps DZETA0_FWD at level 0, the first two at k1 as four backward-Euler half steps
+ *    (Rannacher), which damps the delta start. Backward solves: steps DZETA0_BWD, all
+ *    Crank-Nicolson (their start, sigma(g) at the far end, is smooth), done by fold.c.
  *  - Infinite k2: march to kmax where f(g_lo,kmax) ≈ 1 on the whole grid, then add the
  *    remaining variance m0 - tau(kmax) in steps uniform in tau with a = f^2/2 per unit tau
  *    at k(tau): for D near 3 that tail is not small, and f is not yet 1 near the wall.
  *  - Resolution levels L = 0,1,2,... halve dxi and every step; level L+1 contains the nodes
- *    of level L, so Richardson extrapolation (second order, checked by the tests) gives the
- *    value and |v(L+1) - v(L)|/3 the error estimate. Levels rise until the estimate is
- *    below tol*max(1,|v|) or the work cap is reached (then a warning says so).
+ *    of level L (the march's nodes are found once per request: zeta_nodes). Richardson
+ *    extrapolation R_L = v_L + (v_L - v_{L-1})/3 removes the h^2 term (second order,
+ *    checked by the tests). The error estimate of R_L is |R_L - R_{L-1}|/2 for tractions
+ *    (RICH_ERR_DIV), |R_L - R_{L-1}| for gap PDFs (whose backward-Euler start leaves an h^3
+ *    term). Levels rise until the estimate is below tol*max(1,|v|) or a cap is reached (then a
+ *    warning says so).
  *  - Lower grid end: where paths freeze depends on the spectrum (theory.md §3), so it is
  *    lowered until moving it once more changes the answer by less than the tolerance; that
  *    change is added to the error estimate.
  */
 #include "ljgap.h"
+#include "fold.h"
+#include "march.h"
 #include "pde.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define ZETA_BETA 10.0  /* weight of the variance in the marching variable zeta */
-#define DZETA0 0.25     /* zeta step at level 0 */
 #define DXI0 0.02       /* relative grid spacing at level 0 */
 #define MAX_LEVEL 7     /* at most 2^7 times the level-0 resolution */
-#define MAX_STEPS 4e6   /* steps of one march, at most */
 #define G_HI_MIN 60.0   /* upper end of the traction grid, at least */
 #define G_LO_FLOOR 0.04 /* never put the lower end below this (or half the lowest gap asked) */
 #define G_LO_FACTOR 0.8 /* each lowering of the lower end */
-#define TAIL_STEPS0 8   /* tau steps of the infinite tail at level 0 (per unit m0 share) */
+/* The Richardson value R_L has no h^2 term; what is left falls by 2^p per level with p >= 3
+ * (measured over the level ladders of 108 spectra: p = 4.0 in the median, 3.1 at the lowest),
+ * so |R_L - R_{L-1}| >= (2^3 - 1) err(R_L) once the levels are in the asymptotic range. The
+ * estimate |R_L - R_{L-1}| / 2 keeps a factor 3.5 for levels that are not yet there
+ * (bench/stability.c measures how often it holds; test_pde checks p >= 3). */
+#define RICH_ERR_DIV 2.0
 
 /* ---- the gap grid ---- */
 typedef struct {
@@ -95,169 +104,11 @@ static int grid_make(pde_grid *G, double xi0, double dxi, size_t n)
     return LJGAP_OK;
 }
 
-/* ---- the march in wavenumber ---- */
-typedef struct {
-    double ka, kb; /* wavenumbers at the two ends (kb may be INFINITY) */
-    double sa, sb; /* coefficient scale: the step's operator is s * f(g,k)^2 * D2 */
-    double theta;  /* 1 backward Euler, 0.5 Crank-Nicolson */
-    int snap;      /* index of the snapshot taken after this step, or -1 */
-} pde_step;
-
-typedef struct {
-    size_t m;       /* number of steps */
-    pde_step *s;    /* steps from k1 upward */
-    double kmax;    /* end of the zeta march */
-    double tau_rem; /* variance added by the tail part */
-} pde_march;
-
-typedef struct {
-    const ljgap_psd *psd;
-    double k0, m0;
-} zeta_ctx;
-
-static double zeta_of(const zeta_ctx *z, double k)
-{
-    return log(k - z->k0) + ZETA_BETA * ljgap_psd_cumvar(z->psd, k) / z->m0;
-}
-
-/* dk/dzeta at k */
-static double dk_dzeta(const zeta_ctx *z, double k)
-{
-    double d = 1.0 / (k - z->k0) + ZETA_BETA * 2.0 * M_PI * k * ljgap_psd_eval(z->psd, k) / z->m0;
-    return 1.0 / d;
-}
-
-/* The step coefficient per unit zeta at k: π k P(k) dk/dzeta (a = that times f^2). */
-static double rate_of(const zeta_ctx *z, double k)
-{
-    return M_PI * k * ljgap_psd_eval(z->psd, k) * dk_dzeta(z, k);
-}
-
-/* The k in [ka,kb] with zeta(k) = target: safeguarded Newton in x = ln(k - k0), started at
- * ka (the march asks for the next node just above the previous one, and zeta is concave in
- * x for the usual spectra, so Newton from the left end converges in a few steps). */
-static double zeta_inv(const zeta_ctx *z, double target, double ka, double kb)
-{
-    double xa = log(ka - z->k0), xb = log(kb - z->k0);
-    double x = xa;
-    for (int it = 0; it < 100; it++) {
-        double k = z->k0 + exp(x);
-        double r = zeta_of(z, k) - target;
-        if (r == 0) return k; /* (else the bracket test below would bisect away from it) */
-        if (r > 0)
-            xb = x;
-        else
-            xa = x;
-        double dkz = dk_dzeta(z, k);
-        double dzdx = dkz > 0 ? (k - z->k0) / dkz : 1.0;
-        double xn = x - r / dzdx;
-        if (!(xn > xa && xn < xb)) xn = 0.5 * (xa + xb);
-        if (fabs(xn - x) < 1e-14 * (1.0 + fabs(x)) || xb - xa < 1e-14 * (1.0 + fabs(x)))
-            return z->k0 + exp(xn);
-        x = xn;
-    }
-    return z->k0 + exp(x);
-}
-
-static void march_free(pde_march *M)
-{
-    free(M->s);
-    M->s = NULL;
-    M->m = 0;
-}
-
-/* Build the steps of level L from k1 through the sorted cut points cuts[0..nc-1] (the
- * last one is the end of the march; INFINITY means the whole PSD). A snapshot index is
- * recorded at each cut. g_lo sets kmax for the infinite tail. */
-static int march_make(pde_march *M, const ljgap_psd *psd, const double *cuts, size_t nc, int L,
-                      double g_lo)
-{
-    memset(M, 0, sizeof *M);
-    zeta_ctx z = {psd, ljgap_k0(), psd->m0};
-    double kend = cuts[nc - 1];
-    int inf = isinf(kend);
-    double kmax = kend;
-    if (inf) {
-        double kw = 1e3 * 9.0 * pow(g_lo, -10.0);
-        kmax = fmax(100.0 * psd->k1, kw);
-        for (size_t c = 0; c + 1 < nc; c++)
-            kmax = fmax(kmax, 10.0 * cuts[c]);
-        if (isfinite(psd->k2)) kmax = psd->k2, inf = 0;
-    }
-    M->kmax = kmax;
-    M->tau_rem = inf ? psd->m0 - ljgap_psd_cumvar(psd, kmax) : 0.0;
-    double scale = ldexp(1.0, L);
-    double dz = DZETA0 / scale;
-    /* Steps are uniform in zeta from zeta(k1), whatever the cuts: a cut ends a step early
-     * (a remainder under 0.3 dz is merged into the step before). So the nodes do not move
-     * when kmax moves (it follows g_lo), and level L+1 holds every node of level L. */
-    double z1 = zeta_of(&z, psd->k1);
-    double zend = zeta_of(&z, kmax);
-    if (!isfinite(z1) || !isfinite(zend) || !(zend > z1)) return LJGAP_EFAIL;
-    /* regular steps, a Rannacher split and a possible extra step per cut, the tail */
-    double need = (zend - z1) / dz + 4.0 + 2.0 * (double)nc;
-    size_t mtail = 0;
-    if (inf && M->tau_rem > 1e-15 * psd->m0) {
-        mtail = (size_t)((2 + ceil(TAIL_STEPS0 * 4.0 * M->tau_rem / psd->m0)) * scale);
-        need += (double)mtail;
-    }
-    if (!(need < MAX_STEPS)) return LJGAP_ECAP;
-    size_t cap = (size_t)need + 4;
-    M->s = malloc(cap * sizeof *M->s);
-    if (!M->s) return LJGAP_ENOMEM;
-    size_t m = 0;
-    double kprev = psd->k1, zprev = z1, rprev = rate_of(&z, psd->k1);
-    long jn = 0;  /* regular nodes zeta(k1) + j dz passed so far */
-    int nreg = 0; /* steps made */
-    for (size_t c = 0; c < nc; c++) {
-        double kc = isinf(cuts[c]) ? kmax : fmin(cuts[c], kmax);
-        double zc = zeta_of(&z, kc);
-        while (zprev < zc && m + 2 < cap) {
-            double zn = z1 + (double)(jn + 1) * dz;
-            double kb;
-            if (zn >= zc - 0.3 * dz)
-                zn = zc, kb = kc;
-            else
-                kb = zeta_inv(&z, zn, kprev, kc);
-            while (z1 + (double)(jn + 1) * dz <= zn + 1e-12 * dz)
-                jn++;
-            double h = zn - zprev, rb = rate_of(&z, kb);
-            if (nreg++ < 2) {
-                /* Rannacher start: each of the first two steps as two backward-Euler halves */
-                double km = zeta_inv(&z, zprev + 0.5 * h, kprev, kb);
-                double sm = 0.5 * h * rate_of(&z, km);
-                M->s[m++] = (pde_step){kprev, km, 0.5 * h * rprev, sm, 1.0, -1};
-                M->s[m++] = (pde_step){km, kb, sm, 0.5 * h * rb, 1.0, -1};
-            } else {
-                M->s[m++] = (pde_step){kprev, kb, h * rprev, h * rb, 0.5, -1};
-            }
-            rprev = rb;
-            kprev = kb;
-            zprev = zn;
-            if (zn >= zc) break;
-        }
-        if (m > 0 && !isinf(cuts[c])) M->s[m - 1].snap = (int)c;
-    }
-    if (mtail && m + mtail <= cap) {
-        double t0 = ljgap_psd_cumvar(psd, kmax), dt = M->tau_rem / (double)mtail;
-        for (size_t j = 0; j < mtail; j++) {
-            double ka = M->s[m - 1].kb;
-            double kb =
-                j + 1 == mtail ? INFINITY : ljgap_psd_k_of_cumvar(psd, t0 + (double)(j + 1) * dt);
-            M->s[m++] = (pde_step){ka, kb, 0.5 * dt, 0.5 * dt, 0.5, -1};
-        }
-    }
-    /* the final snapshot (the whole PSD, or the last cut) */
-    if (isinf(cuts[nc - 1])) M->s[m - 1].snap = (int)(nc - 1);
-    M->m = m;
-    return LJGAP_OK;
-}
-
 /* ---- time stepping ---- */
 typedef struct {
     double *mem;                /* one block holding every array below */
     double *fa, *fb;            /* f^2 on the grid at the two ends of the current step */
-    double ka_cur, kb_cur;      /* which step fa, fb belong to (NAN: none) */
+    double kb_cur;              /* which step's upper end fb belongs to (NAN: none) */
     double *ca, *cb;            /* coefficients s*f^2 at the two ends of a step */
     double *dl, *dd, *du, *rhs; /* tridiagonal system */
     double *tmp;
@@ -278,7 +129,7 @@ static int work_alloc(pde_work *W, size_t n)
     for (int i = 0; i < 9; i++)
         *arr[i] = b + (size_t)i * n;
     W->mem = b;
-    W->ka_cur = W->kb_cur = NAN;
+    W->kb_cur = NAN;
     return LJGAP_OK;
 }
 
@@ -293,63 +144,6 @@ static void tridiag(size_t n, double *dl, double *dd, double *du, double *x)
     x[n - 1] /= dd[n - 1];
     for (size_t i = n - 1; i-- > 0;)
         x[i] = (x[i] - du[i] * x[i + 1]) / dd[i];
-}
-
-/* u <- S u for one step, S = (I - theta Ba)^-1 (I + (1-theta) Bb), B = s f(g,k)^2 D2.
- * W->fa/W->fb hold f^2 at the step's two ends; the caller keeps them current. */
-static void step_backward(const pde_grid *G, pde_work *W, const pde_step *st, double *u)
-{
-    size_t n = G->n;
-    const double *lo = G->lo, *hi = G->hi, *fa = W->fa, *fb = W->fb;
-    double th = st->theta, cb = (1.0 - th) * st->sb, ca = th * st->sa;
-    double *rhs = W->rhs;
-    /* boundary rows are frozen (lo = hi = 0 there) */
-    rhs[0] = u[0];
-    for (size_t i = 1; i + 1 < n; i++) {
-        double d2 = lo[i] * (u[i - 1] - u[i]) + hi[i] * (u[i + 1] - u[i]);
-        rhs[i] = u[i] + cb * fb[i] * d2;
-    }
-    rhs[n - 1] = u[n - 1];
-    /* Solve with dl_i = -c_i lo_i, du_i = -c_i hi_i, dd_i = 1 + c_i (lo_i + hi_i), c_i = ca f_i,
-     * eliminating from both ends towards a meeting row m (a twisted factorisation): the two
-     * division chains are independent, which roughly halves the latency-bound cost of the
-     * Thomas algorithm. Rows 0 and n-1 are frozen (c = 0). */
-    double *inv = W->tmp, *c = W->ca;
-    for (size_t i = 0; i < n; i++)
-        c[i] = ca * fa[i];
-    c[0] = c[n - 1] = 0;
-    size_t m = n / 2;
-    inv[0] = inv[n - 1] = 1.0;
-    for (size_t t = 1; t < m || n - 1 - t > m; t++) {
-        if (t < m) { /* top: row i minus (dl_i/d_{i-1}) row i-1 */
-            size_t i = t;
-            double wi = -c[i] * lo[i] * inv[i - 1];
-            rhs[i] -= wi * rhs[i - 1];
-            inv[i] = 1.0 / (1.0 + c[i] * (lo[i] + hi[i]) + wi * c[i - 1] * hi[i - 1]);
-        }
-        if (n - 1 - t > m) { /* bottom: row j minus (du_j/e_{j+1}) row j+1 */
-            size_t j = n - 1 - t;
-            double wj = -c[j] * hi[j] * inv[j + 1];
-            rhs[j] -= wj * rhs[j + 1];
-            inv[j] = 1.0 / (1.0 + c[j] * (lo[j] + hi[j]) + wj * c[j + 1] * lo[j + 1]);
-        }
-    }
-    /* the meeting row takes both eliminated neighbours */
-    double wl = -c[m] * lo[m] * inv[m - 1], wr = -c[m] * hi[m] * inv[m + 1];
-    double dm =
-        1.0 + c[m] * (lo[m] + hi[m]) + wl * c[m - 1] * hi[m - 1] + wr * c[m + 1] * lo[m + 1];
-    u[m] = (rhs[m] - wl * rhs[m - 1] - wr * rhs[m + 1]) / dm;
-    /* back substitution outwards along two chains */
-    for (size_t t = 1; t <= m || m + t < n; t++) {
-        if (t <= m) {
-            size_t i = m - t;
-            u[i] = (rhs[i] + c[i] * hi[i] * u[i + 1]) * inv[i];
-        }
-        if (m + t < n) {
-            size_t j = m + t;
-            u[j] = (rhs[j] + c[j] * lo[j] * u[j - 1]) * inv[j];
-        }
-    }
 }
 
 /* p <- S^T p: solve (I - theta Ba)^T y = p, then p = (I + (1-theta) Bb)^T y. */
@@ -396,27 +190,17 @@ static void fsq(const pde_grid *G, double k, double *f2)
     }
 }
 
-/* Make W->fa/W->fb hold f^2 at the ends of step st, reusing the other array when the
- * march moves by one node (forward: new fa = old fb; backward: new fb = old fa). */
-static void fsq_step(const pde_grid *G, pde_work *W, const pde_step *st, int forward)
+/* Make W->fa/W->fb hold f^2 at the ends of step st, reusing the previous step's upper end
+ * when the march moves on by one node. */
+static void fsq_step(const pde_grid *G, pde_work *W, const pde_step *st)
 {
-    double *t;
-    if (forward) {
-        if (W->kb_cur == st->ka) {
-            t = W->fa, W->fa = W->fb, W->fb = t;
-        } else {
-            fsq(G, st->ka, W->fa);
-        }
-        fsq(G, st->kb, W->fb);
+    if (W->kb_cur == st->ka) {
+        double *t = W->fa;
+        W->fa = W->fb, W->fb = t;
     } else {
-        if (W->ka_cur == st->kb) {
-            t = W->fb, W->fb = W->fa, W->fa = t;
-        } else {
-            fsq(G, st->kb, W->fb);
-        }
         fsq(G, st->ka, W->fa);
     }
-    W->ka_cur = st->ka;
+    fsq(G, st->kb, W->fb);
     W->kb_cur = st->kb;
 }
 
@@ -446,7 +230,8 @@ typedef struct {
     const ljgap_psd *psd;
     const ljgap_opts *o;
     double deadline;
-    long work; /* grid points x steps spent */
+    long work;        /* grid points x steps spent */
+    zeta_nodes nodes; /* the march nodes found so far */
 } pde_ctx;
 
 /* Which cap stopped a computation, for the warnings. */
@@ -455,57 +240,61 @@ static const char *cap_reason(const pde_ctx *C)
     return ljgap_now() > C->deadline ? "time cap (max_seconds)" : "work cap (max_work)";
 }
 
-/* Backward solve: u on the grid of level L between ln g_lo and ln g_hi. */
-static int solve_curve(pde_ctx *C, double g_lo, double g_hi, int L, pde_grid *G, double **uout)
+/* Backward solve: u on the grid of level L between ln g_lo and ln g_hi (fold.c steps); the
+ * march's end follows g_k <= g_lo (see ljgap__march_make). */
+static int solve_curve(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, pde_grid *G,
+                       double **uout)
 {
     double dxi = DXI0 / ldexp(1.0, L);
     size_t n0 = (size_t)ceil(log(g_hi / g_lo) / DXI0);
+    n0 += n0 % 2; /* an odd number of nodes at every level (fold.c) */
     size_t n = n0 * ((size_t)1 << L) + 1;
     double cut = INFINITY;
     if (isfinite(C->psd->k2)) cut = C->psd->k2;
-    pde_march M;
-    pde_work W = {0};
+    pde_march M = {0};
+    ljgap__fold F = {0};
     double *u = NULL;
     /* anchored at g_hi, so that a lower g_lo only adds nodes below */
     int st = grid_make(G, log(g_hi) - (double)n0 * DXI0, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, &cut, 1, L, g_lo);
+    st = ljgap__march_make(&M, C->psd, &cut, 1, L, g_k, 1, &C->nodes);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
-        goto fail_m;
+        goto fail;
     }
-    st = work_alloc(&W, n);
-    if (st) goto fail_m;
+    st = ljgap__fold_make(&F, n, G->A, G->lo, G->hi);
+    if (st) goto fail;
     u = malloc(n * sizeof *u);
     if (!u) {
         st = LJGAP_ENOMEM;
-        goto fail_m;
+        goto fail;
     }
     for (size_t i = 0; i < n; i++)
         u[i] = ljgap_sigma(G->g[i]);
+    ljgap__fold_put(&F, u, F.x);
     for (size_t j = M.m; j-- > 0;) {
-        fsq_step(G, &W, &M.s[j], 0);
-        step_backward(G, &W, &M.s[j], u);
+        const pde_step *s = &M.s[j];
+        ljgap__fold_back(&F, s->ka, s->kb, s->theta * s->sa, (1.0 - s->theta) * s->sb);
         if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
             st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
-            goto fail_m;
+            goto fail;
         }
     }
     C->work += (long)(n * M.m);
+    ljgap__fold_get(&F, F.x, u);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(u[i])) {
             st = LJGAP_EFAIL;
-            goto fail_m;
+            goto fail;
         }
-    work_free(&W);
-    march_free(&M);
+    ljgap__fold_free(&F);
+    ljgap__march_free(&M);
     *uout = u;
     return LJGAP_OK;
-fail_m:
-    march_free(&M);
 fail:
-    work_free(&W);
+    ljgap__march_free(&M);
+    ljgap__fold_free(&F);
     free(u);
     grid_free(G);
     return st;
@@ -525,13 +314,13 @@ static void curve_result_free(curve_result *r)
     r->sig = NULL;
 }
 
-static int curve_at(pde_ctx *C, double g_lo, double g_hi, int L, const double *g_ave, size_t n,
-                    curve_result *R, ljgap_warnings *w)
+static int curve_at(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, const double *g_ave,
+                    size_t n, curve_result *R, ljgap_warnings *w)
 {
     pde_grid G;
     double *u = NULL;
     memset(R, 0, sizeof *R);
-    int st = solve_curve(C, g_lo, g_hi, L, &G, &u);
+    int st = solve_curve(C, g_lo, g_k, g_hi, L, &G, &u);
     if (st) return st;
     R->n = n;
     R->sig = malloc((n ? n : 1) * sizeof(double));
@@ -539,19 +328,23 @@ static int curve_at(pde_ctx *C, double g_lo, double g_hi, int L, const double *g
         st = LJGAP_ENOMEM;
         goto end;
     }
-    /* values at requested points: cubic through the four nearest nodes (Lagrange) */
+    /* values at requested points: degree 5 through the six nearest nodes (Lagrange in xi,
+     * where the nodes are uniform). Its error, O(dxi^6), changes with the point's place
+     * between the nodes from level to level, so it must stay far below the scheme's error
+     * (a cubic left ~1e-9 to 2e-8 that no extrapolation removes). */
+    static const double den[6] = {-120, 24, -12, 12, -24, 120}; /* prod_{b!=a} (a-b) */
     double xi0 = log(G.g[0]), dxi = log(G.g[1]) - xi0;
     for (size_t j = 0; j < n; j++) {
         double x = (log(g_ave[j]) - xi0) / dxi;
-        long i = (long)floor(x) - 1;
+        long i = (long)floor(x) - 2;
         if (i < 0) i = 0;
-        if (i > (long)G.n - 4) i = (long)G.n - 4;
-        double v = 0;
-        for (int a = 0; a < 4; a++) {
+        if (i > (long)G.n - 6) i = (long)G.n - 6;
+        double t = x - (double)i, v = 0;
+        for (int a = 0; a < 6; a++) {
             double l = 1;
-            for (int b = 0; b < 4; b++)
-                if (b != a) l *= (g_ave[j] - G.g[i + b]) / (G.g[i + a] - G.g[i + b]);
-            v += l * u[i + a];
+            for (int b = 0; b < 6; b++)
+                if (b != a) l *= t - b;
+            v += l / den[a] * u[i + a];
         }
         R->sig[j] = v;
     }
@@ -580,7 +373,7 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
 int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
-    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
     double gmin = 1.0, gmax = 1.0;
     for (size_t j = 0; j < n; j++)
         gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
@@ -594,12 +387,15 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
     int st;
     double trunc = 0; /* error from the lower end */
 
-    /* lower the lower end until the level-0 answer stops changing */
-    st = curve_at(&C, g_lo, g_hi, 0, g_ave, n, &A, w);
-    if (st) return st;
+    /* Lower the lower end until the level-0 answer stops changing. The two solves compared
+     * share the march (its end follows the lower of the two ends), so that their difference
+     * is what the grid's end does and not a change of the level-0 discretisation (which
+     * alone is ~1e-7 for Fig. 4 and would ask for needless lowerings). */
+    st = curve_at(&C, g_lo, g_lo * G_LO_FACTOR, g_hi, 0, g_ave, n, &A, w);
+    if (st) goto end;
     for (;;) {
         double g2 = g_lo * G_LO_FACTOR;
-        st = curve_at(&C, g2, g_hi, 0, g_ave, n, &B, w);
+        st = curve_at(&C, g2, g2, g_hi, 0, g_ave, n, &B, w);
         if (st) goto end;
         double d = curve_diff(&A, &B, want_sum);
         curve_result_free(&A);
@@ -615,14 +411,18 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
                        g_lo, d);
             break;
         }
+        /* the next comparison's upper solve: this end, the next end's march */
+        curve_result_free(&A);
+        st = curve_at(&C, g_lo, g_lo * G_LO_FACTOR, g_hi, 0, g_ave, n, &A, w);
+        if (st) goto end;
     }
-    /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 (second order, so
-     * R_L is fourth-order accurate); the error estimate of R_L is |R_L - R_{L-1}| (the error
-     * of the less accurate R_{L-1}: conservative), plus the lower-end change. */
+    /* Refine. v_L: the answer at level L; R_L = v_L + (v_L - v_{L-1})/3 removes the h^2
+     * term, and R_L converges at order 3.5-4 (see RICH_ERR_DIV); the error estimate of R_L is
+     * |R_L - R_{L-1}| / RICH_ERR_DIV, plus the lower-end change. */
     double est = INFINITY;
     int L = 0, nR = 0;
     for (;;) {
-        st = curve_at(&C, g_lo, g_hi, L + 1, g_ave, n, &B, w);
+        st = curve_at(&C, g_lo, g_lo, g_hi, L + 1, g_ave, n, &B, w);
         if (st == LJGAP_ECAP && L > 0) {
             ljgap_warn(w,
                        "%s reached at resolution level %d: the error estimate is above the "
@@ -653,12 +453,12 @@ int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *
             sigma[j].err = fabs(A.sig[j] - B.sig[j]);
         /* now A = plain level L+1, B = Richardson at L+1 */
         if (nR > 0) {
-            est = curve_diff(&B, &P, want_sum) + trunc;
+            est = curve_diff(&B, &P, want_sum) / RICH_ERR_DIV + trunc;
             for (size_t j = 0; j < n; j++)
-                sigma[j].err = fabs(B.sig[j] - P.sig[j]);
+                sigma[j].err = fabs(B.sig[j] - P.sig[j]) / RICH_ERR_DIV;
             ljgap_est *p = &P.sum.g_eq;
             for (int q = 0; q < 4; q++)
-                x[q].err = fabs(x[q].value - p[q].value);
+                x[q].err = fabs(x[q].value - p[q].value) / RICH_ERR_DIV;
         } else {
             est = curve_diff(&B, &A, want_sum) + trunc;
         }
@@ -690,6 +490,7 @@ end:
     curve_result_free(&A);
     curve_result_free(&B);
     curve_result_free(&P);
+    ljgap__nodes_free(&C.nodes);
     return st;
 }
 
@@ -713,7 +514,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
     double *p = NULL;
     int st = grid_make(G, lx - (double)i0 * dxi, dxi, n);
     if (st) return st;
-    st = march_make(&M, C->psd, cuts, nc, L, g_lo);
+    st = ljgap__march_make(&M, C->psd, cuts, nc, L, g_lo, 0, &C->nodes);
     if (st) goto fail;
     if ((double)C->work + (double)n * (double)M.m > (double)C->o->max_work) {
         st = LJGAP_ECAP;
@@ -730,7 +531,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
         snaps[c] = NULL;
     p[i0] = 1.0;
     for (size_t j = 0; j < M.m; j++) {
-        fsq_step(G, &W, &M.s[j], 1);
+        fsq_step(G, &W, &M.s[j]);
         step_forward(G, &W, &M.s[j], p);
         if (M.s[j].snap >= 0) {
             double *s = malloc(n * sizeof *s);
@@ -754,10 +555,10 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
         }
     free(p);
     work_free(&W);
-    march_free(&M);
+    ljgap__march_free(&M);
     return LJGAP_OK;
 fail_m:
-    march_free(&M);
+    ljgap__march_free(&M);
     for (size_t c = 0; c < nc; c++)
         free(snaps[c]), snaps[c] = NULL;
 fail:
@@ -807,7 +608,7 @@ static double snap_sigma(const pde_grid *G, const double *p)
 int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                   size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
-    pde_ctx C = {psd, o, ljgap_now() + o->max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
     /* march through the cuts in increasing order; out[] keeps the request's order */
     size_t *ord = malloc((nk2 ? nk2 : 1) * sizeof *ord);
     double *cuts = malloc((nk2 ? nk2 : 1) * sizeof *cuts);
@@ -1009,6 +810,7 @@ end:
     pdf_level_free(&B, nk2);
     free(ord);
     free(cuts);
+    ljgap__nodes_free(&C.nodes);
     return st;
 }
 
@@ -1017,9 +819,10 @@ int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, i
 {
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
     curve_result R;
-    int st = curve_at(&C, g_lo, g_hi, level, NULL, 0, &R, NULL);
+    int st = curve_at(&C, g_lo, g_lo, g_hi, level, NULL, 0, &R, NULL);
+    ljgap__nodes_free(&C.nodes);
     if (st) return st;
     *sum = R.sum;
     st = R.sum_ok ? LJGAP_OK : LJGAP_EFAIL;
@@ -1034,11 +837,12 @@ int ljgap_pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double
         return LJGAP_EINVAL;
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {psd, &o, ljgap_now() + o.max_seconds, 0};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
     double cut = fmin(k2, psd->k2);
     pdf_level P = {0};
     memset(out, 0, sizeof *out);
     int st = pdf_level_run(&C, g_ave, g_lo, g_hi, &cut, 1, level, &P);
+    ljgap__nodes_free(&C.nodes);
     if (st) return st;
     const pde_grid *G = &P.G;
     out->k2 = k2;

@@ -23,8 +23,9 @@ fi
 
 H='Content-Type: application/json'
 fast() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":$1}}"; }
-# ~0.5 s of work each, distinct by C (no cache hits)
-slow() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":8,\"C\":$1},\"tol\":1e-9}"; }
+# ~1.5 s of work each, distinct by C (no cache hits); the fairness check needs one to outlast
+# the 0.3 s between the two clients (k2 = 8 at tol 1e-9 took 0.5 s before issue 19, 0.04 s after)
+slow() { echo "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"C\":$1},\"tol\":1e-12}"; }
 # Monte Carlo with 1e6 samples: ~18 s. A client holds a slot with it for exactly as long as it
 # likes by giving up (curl --max-time): the computation is cancelled then (the first checks
 # show it), so the holders below do not depend on the machine's speed.

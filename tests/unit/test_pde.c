@@ -380,6 +380,46 @@ static void test_convergence_order(void **state)
     }
 }
 
+/* The premise of the traction's error estimate (half the change of the Richardson value
+ * between the last two levels): the Richardson values converge at order 3 or more, so that
+ * change is at least 7 times the later value's error. Checked on Fig. 4 and on a finite k2
+ * (where a remainder step at k2 once left an error that did not converge at all), and the
+ * public answers' actual errors against tol 1e-9 stay within their estimates. */
+static void test_extrapolated_order_and_estimate(void **state)
+{
+    (void)state;
+    const double k2s[2] = {INFINITY, 8.0};
+    for (int c = 0; c < 2; c++) {
+        ljgap_psd p = power(2.5, 1, k2s[c], LJGAP_LEVEL_M0, 0.5);
+        ljgap_summary s[5];
+        for (int L = 0; L < 5; L++)
+            assert_int_equal(ljgap_pde_summary_at_level(&p, 0.45, 60, L, &s[L]), LJGAP_OK);
+        for (int q = 0; q < 4; q++) {
+            double v[5], R[5];
+            for (int L = 0; L < 5; L++)
+                v[L] = (&s[L].g_eq)[q].value;
+            for (int L = 1; L < 5; L++)
+                R[L] = v[L] + (v[L] - v[L - 1]) / 3.0;
+            double r = fabs(R[2] - R[3]) / fabs(R[3] - R[4]);
+            print_message("k2=%g field %d: Richardson differences %.3g %.3g %.3g, ratio %.1f\n",
+                          k2s[c], q, R[2] - R[1], R[3] - R[2], R[4] - R[3], r);
+            assert_true(r > 7.0);
+        }
+        ljgap_opts o = opts(), of = opts();
+        of.tol = 1e-9;
+        of.max_work *= 10;
+        ljgap_summary a, b;
+        ljgap_warnings w = {0};
+        assert_int_equal(ljgap_traction(&p, &o, NULL, 0, NULL, &a, &w), LJGAP_OK);
+        assert_int_equal(ljgap_traction(&p, &of, NULL, 0, NULL, &b, &w), LJGAP_OK);
+        assert_int_equal(w.n, 0);
+        for (int q = 0; q < 4; q++) {
+            const ljgap_est *x = &(&a.g_eq)[q], *y = &(&b.g_eq)[q];
+            assert_close(x->value, y->value, x->err - y->err);
+        }
+    }
+}
+
 /* Stiff and extreme inputs: a finite answer with a finite error estimate that is within
  * the tolerance unless a warning says why not. */
 static void test_stiff_and_extreme_inputs(void **state)
@@ -466,6 +506,7 @@ int main(void)
         cmocka_unit_test(test_fig4_reference),
         cmocka_unit_test(test_lower_end_found_for_rough_spectra),
         cmocka_unit_test(test_convergence_order),
+        cmocka_unit_test(test_extrapolated_order_and_estimate),
         cmocka_unit_test(test_stiff_and_extreme_inputs),
         cmocka_unit_test(test_rejects_k1_below_k0),
         cmocka_unit_test(test_work_cap_warns),
