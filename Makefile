@@ -8,8 +8,9 @@
 #   V=1             show commands
 
 PORT ?= 8080
-PKGS := libmicrohttpd libcjson gsl cmocka fftw3
-DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev libfftw3-dev curl jq
+PKGS := libmicrohttpd libcjson gsl cmocka fftw3 sqlite3
+DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev libfftw3-dev libsqlite3-dev \
+        curl jq
 # Commands that must be on PATH; a missing one is installed from the Debian package after the colon.
 CMDS := curl:curl jq:jq
 # Each feature adds to these in its own fragment mk/*.mk:
