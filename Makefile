@@ -1,7 +1,8 @@
 # ljgap -- boring on purpose: pkg-config, out-of-tree build/, -MMD -MP, warnings on.
 #   make            build the library, the CLI build/ljgap and the daemon build/ljgapd
 #   make test       install what is missing, build, run every test (last line: tests: N passed, N failed)
-#   make run        install what is missing, build, serve on $(PORT) with the page from web/
+#   make run        install what is missing, build, serve on $(PORT) with the page from web/ and
+#                   the jobs kept in $(BUILD)/state
 #   make bench      build and run the benchmarks (writes bench/results/)
 #   make deps       install missing Debian packages (apt-get)
 #   SANITIZE=address,undefined   sanitizer build in build/san/
@@ -147,7 +148,7 @@ test: check-deps
 
 run: check-deps
 	@$(MAKE) --no-print-directory all $(RUN_PREP)
-	$(BUILD)/ljgapd --port $(PORT) --web web
+	$(BUILD)/ljgapd --port $(PORT) --web web --state-dir $(BUILD)/state
 
 bench: check-deps
 	@$(MAKE) --no-print-directory all

@@ -17,10 +17,12 @@ check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
     if "$@"; then echo "ok - ${CHECK_PREFIX:-}$desc"; else echo "not ok - ${CHECK_PREFIX:-}$desc"; fi
 }
 
-# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID
+# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID. Its jobs go to
+# the state directory $tmp/NAME.state unless ARGS give a --state-dir.
 start() {
     local name=$1
     shift
+    case " $* " in *" --state-dir "*) ;; *) set -- --state-dir "$tmp/$name.state" "$@" ;; esac
     : >"$tmp/$name.out" # exists before the first look below, however slow the start
     $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
     PID=$!
