@@ -180,7 +180,7 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
     ljgap_job_ctl ctl = {&sl->cancel, on_progress, sl};
     ljgap_reply rep = {0};
     char detail[300];
-    int asked, lost, stopping, ok;
+    int asked, lost, stopping, done, ok;
 
     if (rec->cancel) { /* asked while a lost run had it */
         finish(js, rec, LJGAP_JOB_CANCELLED, NULL);
@@ -210,13 +210,14 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
     lost = sl->lost;
     stopping = js->stopping;
     pthread_mutex_unlock(&js->lock);
-    ok = rep.body && ljgap_job_answer_ok(rep.body, rep.len);
+    done = rep.status >= 200 && rep.status < 300;
+    ok = rep.body && ljgap_job_answer_ok(rep.body, rep.len, !done);
     if (lost) {
         fprintf(stderr,
                 "ljgapd: job %s: its lease lapsed and it was claimed again; this run "
                 "stopped\n",
                 rec->id);
-    } else if (ok && rep.status >= 200 && rep.status < 300) {
+    } else if (ok && done) {
         finish(js, rec, LJGAP_JOB_DONE, rep.body);
     } else if (asked) {
         finish(js, rec, LJGAP_JOB_CANCELLED, ok ? rep.body : NULL);
@@ -228,7 +229,8 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
     } else {
         finish_problem(js, rec, rep.body ? "job-damaged" : "out-of-memory",
                        rep.body ? "Damaged job record" : "Out of memory",
-                       rep.body ? "the job's run gave an answer that is not one JSON object"
+                       rep.body ? "the job's run gave an answer that is not one JSON object "
+                                  "(or not a problem document)"
                                 : "the job ran out of memory");
     }
     ljgap_reply_free(&rep);

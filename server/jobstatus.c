@@ -45,13 +45,6 @@ static cJSON *answer_parse(const char *answer, size_t len)
     return doc;
 }
 
-int ljgap_job_answer_ok(const char *answer, size_t len)
-{
-    cJSON *doc = answer_parse(answer, len);
-    cJSON_Delete(doc);
-    return doc != NULL;
-}
-
 static cJSON *problem_object(int status, const char *slug, const char *title, const char *detail)
 {
     cJSON *p = cJSON_CreateObject();
@@ -107,6 +100,37 @@ static double span_ms(double a, double b)
     return a > 0 && b > a ? round((b - a) * 1e6) / 1e3 : 0;
 }
 
+static int has_string(const cJSON *o, const char *key)
+{
+    return cJSON_IsString(cJSON_GetObjectItemCaseSensitive(o, key));
+}
+
+/* Is p a problem document: type (one of ours), title, status (an HTTP error status), detail
+ * and errors[] of {pointer, detail}? */
+static int is_problem(const cJSON *p)
+{
+    const cJSON *errors = cJSON_GetObjectItemCaseSensitive(p, "errors"), *e;
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(p, "type");
+    const cJSON *status = cJSON_GetObjectItemCaseSensitive(p, "status");
+    if (!cJSON_IsString(type) ||
+        strncmp(type->valuestring, LJGAP_PROBLEM_BASE, strlen(LJGAP_PROBLEM_BASE)) != 0 ||
+        !has_string(p, "title") || !has_string(p, "detail") || !cJSON_IsNumber(status) ||
+        status->valuedouble != floor(status->valuedouble) || status->valuedouble < 400 ||
+        status->valuedouble > 599 || !cJSON_IsArray(errors))
+        return 0;
+    for (e = errors->child; e; e = e->next)
+        if (!has_string(e, "pointer") || !has_string(e, "detail")) return 0;
+    return 1;
+}
+
+int ljgap_job_answer_ok(const char *answer, size_t len, int problem)
+{
+    cJSON *doc = answer_parse(answer, len);
+    int ok = doc && (!problem || is_problem(doc));
+    cJSON_Delete(doc);
+    return ok;
+}
+
 /* Why rec cannot be shown as stored, or NULL when it can; *answer receives its answer parsed
  * (NULL when it has none to show). */
 static const char *damage_of(const ljgap_job_record *rec, cJSON **answer)
@@ -118,6 +142,8 @@ static const char *damage_of(const ljgap_job_record *rec, cJSON **answer)
     if (rec->answer && !(*answer = answer_parse(rec->answer, rec->answer_len)))
         return rec->state == LJGAP_JOB_DONE ? "its result is not one JSON object in UTF-8"
                                             : "its problem is not one JSON object in UTF-8";
+    if (*answer && rec->state != LJGAP_JOB_DONE && !is_problem(*answer))
+        return "its problem lacks type, title, status, detail or errors";
     if (!rec->answer && rec->state == LJGAP_JOB_DONE) return "it is done but has no result";
     if (!rec->answer && rec->state == LJGAP_JOB_FAILED) return "it failed but has no problem";
     return NULL;

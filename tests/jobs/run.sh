@@ -19,36 +19,12 @@ SLOW=1 # multiplier for time bounds
 
 CHECK_PREFIX="jobs: "
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt
+. tests/lib/jobs.sh   # submit, wait_for, wait_state, jq_ok
 
-for b in "$BIN" "$CLI"; do
-    if [ ! -x "$b" ]; then
-        echo "not ok - jobs: $b is not built"
-        exit 1
-    fi
-done
-
-submit() { # submit BODY: POST /v1/simulations; sets ID from the answer
-    req POST /v1/simulations -H 'Content-Type: application/json' --data-binary "$1"
-    ID=$(jq -r '.id // empty' "$tmp/body" 2>/dev/null)
-}
-jq_ok() { jq -e "$@" >/dev/null 2>&1; } # jq -e quietly: a check's own ok line must show
 problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
     [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
         json --argjson s "$1" '.status == $s and (.type | startswith("https://ljgap.example/problems/"))
             and (.title | type == "string") and (.detail | type == "string")'
-}
-# wait_state ID STATE...: poll GET /v1/simulations/ID until its status is one of STATE (60 s)
-wait_state() {
-    local id=$1
-    shift
-    for _ in $(seq 1 $((600 * SLOW))); do
-        req GET "/v1/simulations/$id"
-        local s
-        s=$(jq -r .status "$tmp/body" 2>/dev/null)
-        for want in "$@"; do [ "$s" = "$want" ] && return 0; done
-        sleep 0.1
-    done
-    return 1
 }
 
 PSD='"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1}'

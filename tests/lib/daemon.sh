@@ -18,11 +18,15 @@ check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
 }
 
 # start NAME ARGS...: run the daemon, wait for its first line, set URL and PID. Its jobs go to
-# the state directory $tmp/NAME.state unless ARGS give a --state-dir.
+# the state directory $tmp/NAME.state unless ARGS give a --state-dir (or NO_STATE_DIR is set:
+# then the daemon picks its default).
 start() {
     local name=$1
     shift
-    case " $* " in *" --state-dir "*) ;; *) set -- --state-dir "$tmp/$name.state" "$@" ;; esac
+    case " $* " in
+    *" --state-dir "*) ;;
+    *) [ -n "${NO_STATE_DIR:-}" ] || set -- --state-dir "$tmp/$name.state" "$@" ;;
+    esac
     : >"$tmp/$name.out" # exists before the first look below, however slow the start
     $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
     PID=$!

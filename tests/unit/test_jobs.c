@@ -31,6 +31,18 @@ static void reply(ljgap_reply *out, int status, const char *body)
     out->content_type = "application/json";
 }
 
+/* Answers a problem of type slug with that status. */
+static void reply_problem(ljgap_reply *out, int status, const char *slug)
+{
+    char buf[200];
+    snprintf(buf, sizeof buf,
+             "{\"type\":\"https://ljgap.example/problems/%s\",\"title\":\"t\",\"status\":%d,"
+             "\"detail\":\"d\",\"errors\":[]}",
+             slug, status);
+    reply(out, status, buf);
+    out->content_type = "application/problem+json";
+}
+
 /* Answers {"x": N} at once for the body "N"; 400 for a body that is not a number. */
 static void run_fast(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
                      ljgap_reply *out)
@@ -41,9 +53,7 @@ static void run_fast(void *ctx, const char *body, size_t len, const ljgap_job_ct
     atomic_fetch_add(&started, 1);
     ctl->progress(ctl->ctx, 0.5);
     if (len == 0 || end != body + len) {
-        reply(out, 400,
-              "{\"type\":\"https://ljgap.example/problems/malformed-json\","
-              "\"status\":400}");
+        reply_problem(out, 400, "malformed-json");
         return;
     }
     snprintf(buf, sizeof buf, "{\"x\":%ld}", v);
@@ -56,7 +66,7 @@ static void run_fail(void *ctx, const char *body, size_t len, const ljgap_job_ct
 {
     (void)ctx, (void)body, (void)len, (void)ctl;
     atomic_fetch_add(&started, 1);
-    reply(out, 422, "{\"type\":\"https://ljgap.example/problems/no-answer\",\"status\":422}");
+    reply_problem(out, 422, "no-answer");
 }
 
 /* Reports progress N/100 for the body "N" (then a smaller value, to be ignored) and holds its
@@ -73,7 +83,7 @@ static void run_held(void *ctx, const char *body, size_t len, const ljgap_job_ct
         sleep_ms(1);
     if (*ctl->cancel) {
         atomic_fetch_add(&saw_stop, 1);
-        reply(out, 503, "{\"type\":\"https://ljgap.example/problems/unavailable\"}");
+        reply_problem(out, 503, "unavailable");
     } else {
         reply(out, 200, "{\"held\":true}");
     }

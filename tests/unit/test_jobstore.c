@@ -626,6 +626,13 @@ static void test_damaged_rows(void **state)
         /* 8: failed without a problem */ "state = 'failed', answer = NULL",
         /* 9: a NUL inside */ "state = 'failed', answer = CAST(x'7b7d007b7d' AS TEXT)",
         /* 10: trailing garbage */ "state = 'done', answer = '{} {}'",
+        /* 11: a problem that is not one */ "state = 'failed', answer = '{\"x\":1}'",
+        /* 12: errors that are not {pointer, detail} */
+        "state = 'cancelled', answer = '{\"type\":\"" LJGAP_PROBLEM_BASE "x\",\"title\":\"t\","
+        "\"status\":1,\"detail\":\"d\",\"errors\":[1]}'",
+        /* 13: someone else's problem type */
+        "state = 'failed', answer = '{\"type\":\"about:blank\",\"title\":\"t\","
+        "\"status\":1,\"detail\":\"d\",\"errors\":[]}'",
     };
     char sql[600], id[LJGAP_JOB_ID_LEN + 1];
     cJSON *doc;
