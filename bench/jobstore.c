@@ -93,8 +93,9 @@ int main(int argc, char **argv)
         t[5][i] = 1e3 * (ljgap_now() - t0);
         ljgap_job_record_clear(&rec);
     }
-    printf("# job store: SQLite %s, WAL, FULL commits for create/cancel/finish, in %s\n",
-           sqlite3_libversion(), dir);
+    printf("# job store: SQLite %s, WAL, FULL commits for create/cancel/finish, on a temporary "
+           "directory\n",
+           sqlite3_libversion());
     report("create (committed)", t[0], n);
     report("get + status JSON (20 kB result)", t[4], n);
     report("cancel (a queued job)", t[5], n);
