@@ -43,7 +43,7 @@ typedef struct slot {
     int lost;                      /* the store gave the job to someone else */
     double progress;               /* latest fraction reported, 0..1 */
     double written;                /* progress last written to the store */
-    double renewed;                /* ljgap_now() at the last renewal (or the claim) */
+    double renewed;                /* ljgap_now() at the last renewal (0: due) */
 } slot;
 
 struct ljgap_jobs {
@@ -268,7 +268,8 @@ static void *worker(void *arg)
         sl->cancel = 0;
         sl->asked = sl->lost = 0;
         sl->progress = sl->written = 0;
-        sl->renewed = ljgap_now();
+        sl->renewed = 0; /* renewed at the keeper's next tick: a cancel asked between the claim
+                          * and now (the slot was not busy yet) is seen within a tick */
         pthread_mutex_unlock(&js->lock);
 
         execute(js, sl, &rec);
