@@ -1,7 +1,8 @@
 # ljgap -- boring on purpose: pkg-config, out-of-tree build/, -MMD -MP, warnings on.
 #   make            build the library, the CLI build/ljgap and the daemon build/ljgapd
 #   make test       install what is missing, build, run every test (last line: tests: N passed, N failed)
-#   make run        install what is missing, build, serve on $(PORT) with the page from web/
+#   make run        install what is missing, build, serve on $(PORT) with the page from web/ and
+#                   the jobs kept in $(BUILD)/state
 #   make bench      build and run the benchmarks (writes bench/results/); BENCH="speed errtime"
 #                   runs only those
 #   make deps       install missing Debian packages (apt-get)
@@ -9,8 +10,9 @@
 #   V=1             show commands
 
 PORT ?= 8080
-PKGS := libmicrohttpd libcjson gsl cmocka fftw3
-DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev libfftw3-dev curl jq
+PKGS := libmicrohttpd libcjson gsl cmocka fftw3 sqlite3
+DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libcmocka-dev libfftw3-dev libsqlite3-dev \
+        curl jq
 # Commands that must be on PATH; a missing one is installed from the Debian package after the colon.
 CMDS := curl:curl jq:jq
 # Each feature adds to these in its own fragment mk/*.mk:
@@ -147,7 +149,7 @@ test: check-deps
 
 run: check-deps
 	@$(MAKE) --no-print-directory all $(RUN_PREP)
-	$(BUILD)/ljgapd --port $(PORT) --web web
+	$(BUILD)/ljgapd --port $(PORT) --web web --state-dir $(BUILD)/state
 
 bench: check-deps
 	@$(MAKE) --no-print-directory all

@@ -1,63 +1,69 @@
-/* jobs.c -- the daemon's background jobs (jobs.h): one list, one lock, a few workers.
+/* jobs.c -- the daemon's background jobs (jobs.h): workers and a keeper around a job store.
  *
- * Every job, whatever its state, sits in one doubly-linked list in submission order, so the
- * oldest queued job is the first queued one found (FIFO) and lookups by id are a walk. The
- * list is short by construction: at most queue_cap queued, `workers` running and keep_done
- * finished jobs, a hundred or so, so a walk costs less than the HTTP request that asks for it.
+ * The store (jobstore.h) holds every job; this file only runs them. Each worker owns a slot
+ * that says what it runs now (id, claim, cancel flag, latest progress). A worker claims the
+ * oldest job from the store, runs the kind's function on the stored body without any lock
+ * held, and writes the answer back; then it evicts what expired and claims again. Idle
+ * workers sleep on a condition variable that a submit in this process signals, and look at
+ * the store every poll_seconds anyway (jobs queued by another process sharing the store, a
+ * lapsed lease).
  *
- * One mutex guards the list and every job's fields except `cancel`, which the running job's
- * computation reads without the lock (it is the core's volatile cancel flag). Two condition
- * variables on CLOCK_MONOTONIC: `work` wakes the workers (a job was queued, or shutdown) and
- * `finished` wakes whoever waits for a job to end (ljgap_jobs_cancel, ljgap_jobs_wait_idle).
- * A worker runs the job's function without the lock; the job cannot be evicted meanwhile,
- * because only finished jobs are.
+ * The keeper thread does the store I/O of running jobs, so the computation's progress
+ * callback only stores a number: every tick it writes a slot's progress when it rose (at most
+ * every progress_seconds), renews the lease every third of it, and reads back a cancel asked
+ * through the store. A cancel asked in this process raises the slot's flag at once.
  *
- * Ids are 128 bits from getrandom(2) in hex: not guessable, so one client cannot read or
- * cancel another's job by counting.
+ * One mutex guards the slots and the flags; the computation reads its slot's `cancel`
+ * without it (the core's volatile cancel flag). Store calls are never made with the mutex
+ * held. Two condition variables on CLOCK_MONOTONIC: `work` (a job was submitted here, or
+ * stopping) and `finished` (a job running here returned, or the keeper must wake).
  */
 #include "jobs.h"
+#include "jobstatus.h"
 #include "ljgap.h"
 
-#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/random.h>
 #include <time.h>
+#include <unistd.h>
 
-typedef enum { JOB_QUEUED, JOB_RUNNING, JOB_DONE, JOB_FAILED, JOB_CANCELLED } job_state;
+#define EVICT_SECONDS 5.0 /* the keeper evicts expired jobs this often */
+#define LOG_SECONDS 10.0  /* at most one store error logged per this many seconds */
 
-static const char *const state_names[] = {"queued", "running", "done", "failed", "cancelled"};
-
-typedef struct job {
-    struct job *prev, *next;       /* the store's list, in submission order */
-    struct ljgap_jobs *js;         /* the store (for the progress callback) */
-    char id[LJGAP_JOB_ID_LEN + 1]; /* hex id */
-    job_state state;               /* where it is in its life */
-    ljgap_job_fn run;              /* the work */
-    void *arg;                     /* its argument, owned; NULL once released */
-    void (*free_arg)(void *);      /* releases arg (may be NULL) */
+typedef struct slot {
+    struct ljgap_jobs *js;         /* the runner (for the progress callback) */
+    int busy;                      /* a job runs in this slot */
+    char id[LJGAP_JOB_ID_LEN + 1]; /* its id */
+    long run;                      /* its claim (the lease token) */
     volatile int cancel;           /* raised by cancel or shutdown; read by the run unlocked */
-    double progress;               /* 0..1, never decreasing */
-    double t_start, t_end;         /* ljgap_now() when it started running / finished */
-    int reply_status;              /* HTTP status of the run's reply, when finished */
-    char *reply;                   /* the run's reply body (JSON), owned; NULL if none */
-} job;
+    int asked;                     /* a cancel was asked (here or through the store) */
+    int lost;                      /* the store gave the job to someone else */
+    double progress;               /* latest fraction reported, 0..1 */
+    double written;                /* progress last written to the store */
+    double renewed;                /* ljgap_now() at the last renewal (0: due) */
+} slot;
 
 struct ljgap_jobs {
-    ljgap_jobs_config cfg; /* as given, checked */
-    pthread_mutex_t lock;
-    pthread_cond_t work;     /* a job was queued, or the store is stopping */
-    pthread_cond_t finished; /* a job finished */
-    job *head, *tail;        /* every job, oldest first */
-    unsigned n_queued;       /* jobs in state queued */
-    unsigned n_running;      /* jobs in state running */
-    unsigned n_finished;     /* jobs in a final state */
+    ljgap_jobs_config cfg;   /* as given, checked */
+    ljgap_jobstore *store;   /* the caller's */
+    ljgap_job_kind *kinds;   /* copied at alloc */
+    size_t nkinds;           /* entries in kinds */
+    char owner[96];          /* host:pid, the name claims are made under */
+    pthread_mutex_t lock;    /* guards everything below */
+    pthread_cond_t work;     /* a job was submitted here, or stopping */
+    pthread_cond_t finished; /* a job running here returned, or the keeper must quit */
+    unsigned long submitted; /* jobs submitted here so far (a worker's claim saw up to...) */
     int stopping;            /* ljgap_jobs_shutdown was called */
+    int keeper_quit;         /* the keeper must return */
+    double logged;           /* ljgap_now() of the last store error logged */
+    slot *slots;             /* one per worker */
     pthread_t *threads;      /* the workers */
     unsigned n_threads;      /* workers started */
+    pthread_t keeper;        /* the keeper */
+    int keeper_started;      /* it was started */
 };
 
 void ljgap_jobs_config_default(ljgap_jobs_config *c)
@@ -66,252 +72,10 @@ void ljgap_jobs_config_default(ljgap_jobs_config *c)
     c->queue_cap = 8;
     c->keep_done = 64;
     c->keep_seconds = 3600.0;
-}
-
-/* ---- the list (lock held) ---- */
-
-static job *find(ljgap_jobs *js, const char *id)
-{
-    for (job *j = js->head; j; j = j->next)
-        if (strcmp(j->id, id) == 0) return j;
-    return NULL;
-}
-
-static void unlink_job(ljgap_jobs *js, job *j)
-{
-    if (j->prev)
-        j->prev->next = j->next;
-    else
-        js->head = j->next;
-    if (j->next)
-        j->next->prev = j->prev;
-    else
-        js->tail = j->prev;
-}
-
-static void release_arg(job *j)
-{
-    if (j->arg && j->free_arg) j->free_arg(j->arg);
-    j->arg = NULL;
-}
-
-static void job_free(job *j)
-{
-    release_arg(j);
-    free(j->reply);
-    free(j);
-}
-
-/* Moves j (queued or running) to a final state, taking reply (may be NULL). */
-static void finish(ljgap_jobs *js, job *j, job_state state, int status, char *reply)
-{
-    if (j->state == JOB_QUEUED)
-        js->n_queued--;
-    else
-        js->n_running--;
-    js->n_finished++;
-    j->state = state;
-    j->t_end = ljgap_now();
-    j->reply_status = status;
-    j->reply = reply;
-    if (state == JOB_DONE) j->progress = 1.0;
-    pthread_cond_broadcast(&js->finished);
-}
-
-/* Drops finished jobs older than keep_seconds, then the oldest finished ones beyond
- * keep_done. */
-static void evict(ljgap_jobs *js)
-{
-    double now = ljgap_now();
-    for (job *j = js->head, *next; j; j = next) {
-        next = j->next;
-        if (j->state >= JOB_DONE && now - j->t_end > js->cfg.keep_seconds) {
-            unlink_job(js, j);
-            js->n_finished--;
-            job_free(j);
-        }
-    }
-    while (js->n_finished > js->cfg.keep_done) {
-        job *oldest = NULL;
-        for (job *j = js->head; j; j = j->next)
-            if (j->state >= JOB_DONE && (!oldest || j->t_end < oldest->t_end)) oldest = j;
-        unlink_job(js, oldest);
-        js->n_finished--;
-        job_free(oldest);
-    }
-}
-
-/* The status object of j as a malloc'd string, or NULL. */
-static char *status_json(const job *j)
-{
-    double run_s = j->state == JOB_QUEUED    ? 0
-                   : j->state == JOB_RUNNING ? ljgap_now() - j->t_start
-                                             : j->t_end - j->t_start;
-    const char *key = j->state == JOB_DONE ? "result" : "problem";
-    int has_reply = j->reply && j->state != JOB_QUEUED && j->state != JOB_RUNNING;
-    char *s = NULL;
-    int n = asprintf(
-        &s, "{\"id\":\"%s\",\"status\":\"%s\",\"progress\":%.6g,\"elapsed_ms\":%.3f%s%s%s%s}",
-        j->id, state_names[j->state], j->progress, j->t_start > 0 ? 1e3 * run_s : 0.0,
-        has_reply ? ",\"" : "", has_reply ? key : "", has_reply ? "\":" : "",
-        has_reply ? j->reply : "");
-    return n < 0 ? NULL : s;
-}
-
-/* ---- workers ---- */
-
-static void on_progress(void *ctx, double fraction)
-{
-    job *j = ctx;
-    pthread_mutex_lock(&j->js->lock);
-    if (fraction > j->progress) j->progress = fraction < 1 ? fraction : 1;
-    pthread_mutex_unlock(&j->js->lock);
-}
-
-static job *first_queued(ljgap_jobs *js)
-{
-    for (job *j = js->head; j; j = j->next)
-        if (j->state == JOB_QUEUED) return j;
-    return NULL;
-}
-
-static void *worker(void *arg)
-{
-    ljgap_jobs *js = arg;
-    pthread_mutex_lock(&js->lock);
-    for (;;) {
-        job *j;
-        ljgap_reply rep = {0};
-        ljgap_job_ctl ctl;
-        char *body;
-        job_state state;
-        while (!js->stopping && !(j = first_queued(js)))
-            pthread_cond_wait(&js->work, &js->lock);
-        if (js->stopping) break;
-        j->state = JOB_RUNNING;
-        js->n_queued--;
-        js->n_running++;
-        j->t_start = ljgap_now();
-        pthread_mutex_unlock(&js->lock);
-
-        ctl.cancel = &j->cancel;
-        ctl.progress = on_progress;
-        ctl.ctx = j;
-        j->run(j->arg, &ctl, &rep);
-        body = rep.body ? strndup(rep.body, rep.len) : NULL;
-        if (rep.status >= 200 && rep.status < 300 && body)
-            state = JOB_DONE;
-        else
-            state = j->cancel ? JOB_CANCELLED : JOB_FAILED;
-
-        pthread_mutex_lock(&js->lock);
-        release_arg(j);
-        finish(js, j, state, body ? rep.status : 500, body);
-        ljgap_reply_free(&rep);
-        evict(js);
-    }
-    pthread_mutex_unlock(&js->lock);
-    return NULL;
-}
-
-/* ---- the interface ---- */
-
-ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c)
-{
-    ljgap_jobs *js;
-    pthread_condattr_t ca;
-    if (!c || c->workers < 1 || c->queue_cap < 1 || !(c->keep_seconds >= 0)) return NULL;
-    if (!(js = calloc(1, sizeof *js))) return NULL;
-    js->cfg = *c;
-    if (!(js->threads = calloc(c->workers, sizeof *js->threads))) {
-        free(js);
-        return NULL;
-    }
-    pthread_mutex_init(&js->lock, NULL);
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&js->work, &ca);
-    pthread_cond_init(&js->finished, &ca);
-    pthread_condattr_destroy(&ca);
-    while (js->n_threads < c->workers &&
-           pthread_create(&js->threads[js->n_threads], NULL, worker, js) == 0)
-        js->n_threads++;
-    if (js->n_threads < c->workers) {
-        ljgap_jobs_free(js);
-        return NULL;
-    }
-    return js;
-}
-
-/* A fresh random id not in use (lock held); 0 on success. */
-static int new_id(ljgap_jobs *js, char id[LJGAP_JOB_ID_LEN + 1])
-{
-    unsigned char raw[LJGAP_JOB_ID_LEN / 2];
-    do {
-        size_t got = 0;
-        while (got < sizeof raw) {
-            ssize_t n = getrandom(raw + got, sizeof raw - got, 0);
-            if (n < 0 && errno != EINTR) return -1;
-            if (n > 0) got += (size_t)n;
-        }
-        for (size_t i = 0; i < sizeof raw; i++)
-            sprintf(id + 2 * i, "%02x", raw[i]);
-    } while (find(js, id));
-    return 0;
-}
-
-int ljgap_jobs_submit(ljgap_jobs *js, ljgap_job_fn run, void *arg, void (*free_arg)(void *),
-                      char id[LJGAP_JOB_ID_LEN + 1])
-{
-    job *j = calloc(1, sizeof *j);
-    int st = LJGAP_JOBS_OK;
-    id[0] = '\0';
-    if (!j) {
-        if (free_arg) free_arg(arg);
-        return LJGAP_JOBS_NOMEM;
-    }
-    j->js = js;
-    j->run = run;
-    j->arg = arg;
-    j->free_arg = free_arg;
-    pthread_mutex_lock(&js->lock);
-    evict(js);
-    if (js->stopping)
-        st = LJGAP_JOBS_STOPPING;
-    else if (js->n_queued >= js->cfg.queue_cap)
-        st = LJGAP_JOBS_FULL;
-    else if (new_id(js, j->id) != 0)
-        st = LJGAP_JOBS_NOMEM;
-    if (st == LJGAP_JOBS_OK) {
-        j->state = JOB_QUEUED;
-        j->prev = js->tail;
-        if (js->tail)
-            js->tail->next = j;
-        else
-            js->head = j;
-        js->tail = j;
-        js->n_queued++;
-        memcpy(id, j->id, sizeof j->id);
-        pthread_cond_signal(&js->work);
-    }
-    pthread_mutex_unlock(&js->lock);
-    if (st != LJGAP_JOBS_OK) job_free(j);
-    return st;
-}
-
-int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json)
-{
-    job *j;
-    int st = LJGAP_JOBS_OK;
-    *json = NULL;
-    pthread_mutex_lock(&js->lock);
-    evict(js);
-    if (!(j = find(js, id)))
-        st = LJGAP_JOBS_UNKNOWN;
-    else if (!(*json = status_json(j)))
-        st = LJGAP_JOBS_NOMEM;
-    pthread_mutex_unlock(&js->lock);
-    return st;
+    c->lease_seconds = 30.0;
+    c->progress_seconds = 0.5;
+    c->poll_seconds = 1.0;
+    c->max_lost = 3;
 }
 
 /* Absolute CLOCK_MONOTONIC time s seconds from now. */
@@ -330,59 +94,410 @@ static struct timespec deadline_in(double s)
     return t;
 }
 
-int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final)
+/* Logs a store failure (what + the store's reason), at most once per LOG_SECONDS. */
+static void log_store(ljgap_jobs *js, const char *what, const char *id)
 {
-    struct timespec until = deadline_in(wait_s);
-    job *j;
-    int st = LJGAP_JOBS_OK;
-    *json = NULL;
-    *final = 0;
+    double now = ljgap_now();
+    int say;
     pthread_mutex_lock(&js->lock);
-    evict(js);
-    j = find(js, id);
-    if (j && j->state == JOB_QUEUED) {
-        release_arg(j);
-        finish(js, j, JOB_CANCELLED, 0, NULL);
-    } else if (j && j->state == JOB_RUNNING) {
-        j->cancel = 1;
-        /* the job may finish and even be evicted while we wait: look it up again */
-        while ((j = find(js, id)) && j->state == JOB_RUNNING &&
-               pthread_cond_timedwait(&js->finished, &js->lock, &until) == 0)
-            ;
-        j = find(js, id);
+    say = js->logged == 0 || now - js->logged >= LOG_SECONDS;
+    if (say) js->logged = now;
+    pthread_mutex_unlock(&js->lock);
+    if (say)
+        fprintf(stderr, "ljgapd: job store: %s%s%s: %s\n", what, id ? " " : "", id ? id : "",
+                ljgap_jobstore_errmsg());
+}
+
+static int map_store(int st)
+{
+    switch (st) {
+    case LJGAP_JOBSTORE_OK:
+        return LJGAP_JOBS_OK;
+    case LJGAP_JOBSTORE_UNKNOWN:
+        return LJGAP_JOBS_UNKNOWN;
+    case LJGAP_JOBSTORE_FULL:
+        return LJGAP_JOBS_FULL;
+    case LJGAP_JOBSTORE_NOMEM:
+        return LJGAP_JOBS_NOMEM;
+    default:
+        return LJGAP_JOBS_STORE;
     }
-    if (!j) {
-        st = LJGAP_JOBS_UNKNOWN;
+}
+
+static const ljgap_job_kind *find_kind(const ljgap_jobs *js, const char *name)
+{
+    for (size_t i = 0; i < js->nkinds; i++)
+        if (strcmp(js->kinds[i].name, name) == 0) return &js->kinds[i];
+    return NULL;
+}
+
+/* ---- workers ---- */
+
+static void on_progress(void *ctx, double fraction)
+{
+    slot *sl = ctx;
+    pthread_mutex_lock(&sl->js->lock);
+    if (fraction > sl->progress) sl->progress = fraction < 1 ? fraction : 1;
+    pthread_mutex_unlock(&sl->js->lock);
+}
+
+/* Writes the end of claim rec: finish in state with answer (may be NULL). A store error is
+ * tried again twice (the job would otherwise wait for the next start or lease). */
+static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state state,
+                   const char *answer)
+{
+    int st = LJGAP_JOBSTORE_ERROR;
+    for (int i = 0; i < 3 && st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_LOST; i++) {
+        if (i) usleep(200000);
+        st = ljgap_jobstore_finish(js->store, rec->id, rec->run, state, answer,
+                                   answer ? strlen(answer) : 0);
+    }
+    if (st == LJGAP_JOBSTORE_LOST)
+        fprintf(stderr,
+                "ljgapd: job %s: its lease lapsed and it was claimed again; this run's "
+                "answer is dropped\n",
+                rec->id);
+    else if (st != LJGAP_JOBSTORE_OK)
+        log_store(js, "cannot write the end of job", rec->id);
+    if (ljgap_jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL) !=
+        LJGAP_JOBSTORE_OK)
+        log_store(js, "cannot evict finished jobs", NULL);
+}
+
+/* Finishes rec failed with a 500 problem of type slug. */
+static void finish_problem(ljgap_jobs *js, const ljgap_job_record *rec, const char *slug,
+                           const char *title, const char *detail)
+{
+    char *p = ljgap_job_problem(500, slug, title, detail);
+    finish(js, rec, LJGAP_JOB_FAILED, p); /* NULL (out of memory): failed without a problem */
+    free(p);
+}
+
+/* Runs claimed job rec in slot sl and writes its end. */
+static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
+{
+    const ljgap_job_kind *kind = find_kind(js, rec->kind);
+    ljgap_job_ctl ctl = {&sl->cancel, on_progress, sl};
+    ljgap_reply rep = {0};
+    char detail[300];
+    int asked, lost, stopping, done, ok;
+
+    if (rec->cancel) { /* asked while a lost run had it */
+        finish(js, rec, LJGAP_JOB_CANCELLED, NULL);
+        return;
+    }
+    if (js->cfg.max_lost && rec->lost >= (long)js->cfg.max_lost) {
+        snprintf(detail, sizeof detail,
+                 "the job was started %ld times and each time the server stopped before it "
+                 "finished (a crash or a kill); it is not run again: see the server's log, and "
+                 "submit the request anew",
+                 rec->lost);
+        finish_problem(js, rec, "job-abandoned", "Job abandoned", detail);
+        return;
+    }
+    if (!kind) {
+        snprintf(detail, sizeof detail,
+                 "the stored record of this job is damaged (its kind \"%.40s\" is not one this "
+                 "server runs); it cannot be shown or run again: submit the request anew",
+                 rec->kind);
+        finish_problem(js, rec, "job-damaged", "Damaged job record", detail);
+        return;
+    }
+    kind->run(kind->ctx, rec->request, rec->request_len, &ctl, &rep);
+
+    pthread_mutex_lock(&js->lock);
+    asked = sl->asked;
+    lost = sl->lost;
+    stopping = js->stopping;
+    pthread_mutex_unlock(&js->lock);
+    done = rep.status >= 200 && rep.status < 300;
+    ok = rep.body && ljgap_job_answer_ok(rep.body, rep.len, !done);
+    if (lost) {
+        fprintf(stderr,
+                "ljgapd: job %s: its lease lapsed and it was claimed again; this run "
+                "stopped\n",
+                rec->id);
+    } else if (ok && done) {
+        finish(js, rec, LJGAP_JOB_DONE, rep.body);
+    } else if (asked) {
+        finish(js, rec, LJGAP_JOB_CANCELLED, ok ? rep.body : NULL);
+    } else if (stopping) { /* stopped by the shutdown: it runs again at the next start */
+        if (ljgap_jobstore_release(js->store, rec->id, rec->run) == LJGAP_JOBSTORE_ERROR)
+            log_store(js, "cannot put back job", rec->id);
+    } else if (ok) {
+        finish(js, rec, LJGAP_JOB_FAILED, rep.body);
     } else {
-        *final = j->state != JOB_RUNNING;
-        if (!(*json = status_json(j))) st = LJGAP_JOBS_NOMEM;
+        finish_problem(js, rec, rep.body ? "job-damaged" : "out-of-memory",
+                       rep.body ? "Damaged job record" : "Out of memory",
+                       rep.body ? "the job's run gave an answer that is not one JSON object "
+                                  "(or not a problem document)"
+                                : "the job ran out of memory");
+    }
+    ljgap_reply_free(&rep);
+}
+
+static void *worker(void *arg)
+{
+    slot *sl = arg;
+    ljgap_jobs *js = sl->js;
+    pthread_mutex_lock(&js->lock);
+    while (!js->stopping) {
+        ljgap_job_record rec;
+        unsigned long seen = js->submitted;
+        int st;
+        pthread_mutex_unlock(&js->lock);
+        st = ljgap_jobstore_claim(js->store, js->owner, js->cfg.lease_seconds, &rec);
+        if (st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_EMPTY) log_store(js, "claim", NULL);
+        pthread_mutex_lock(&js->lock);
+        if (st != LJGAP_JOBSTORE_OK) {
+            struct timespec until = deadline_in(js->cfg.poll_seconds);
+            if (!js->stopping && js->submitted == seen)
+                pthread_cond_timedwait(&js->work, &js->lock, &until);
+            continue;
+        }
+        if (js->stopping) { /* claimed as we stop: give it back untouched */
+            pthread_mutex_unlock(&js->lock);
+            ljgap_jobstore_release(js->store, rec.id, rec.run);
+            ljgap_job_record_clear(&rec);
+            pthread_mutex_lock(&js->lock);
+            break;
+        }
+        sl->busy = 1;
+        memcpy(sl->id, rec.id, sizeof sl->id);
+        sl->run = rec.run;
+        sl->cancel = 0;
+        sl->asked = sl->lost = 0;
+        sl->progress = sl->written = 0;
+        sl->renewed = 0; /* renewed at the keeper's next tick: a cancel asked between the claim
+                          * and now (the slot was not busy yet) is seen within a tick */
+        pthread_mutex_unlock(&js->lock);
+
+        execute(js, sl, &rec);
+        ljgap_job_record_clear(&rec);
+
+        pthread_mutex_lock(&js->lock);
+        sl->busy = 0;
+        pthread_cond_broadcast(&js->finished);
     }
     pthread_mutex_unlock(&js->lock);
+    return NULL;
+}
+
+/* ---- the keeper ---- */
+
+/* Renews slot sl if it is due (lock held; released around the store call). */
+static void keep_slot(ljgap_jobs *js, slot *sl, double now)
+{
+    char id[LJGAP_JOB_ID_LEN + 1];
+    long run = sl->run;
+    double progress = sl->progress;
+    int cancel = 0, st;
+    if (!(sl->busy && !sl->lost &&
+          ((progress > sl->written && now - sl->renewed >= js->cfg.progress_seconds) ||
+           now - sl->renewed >= js->cfg.lease_seconds / 3)))
+        return;
+    memcpy(id, sl->id, sizeof id);
+    pthread_mutex_unlock(&js->lock);
+    st = ljgap_jobstore_renew(js->store, id, run, progress, js->cfg.lease_seconds, &cancel);
+    if (st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_LOST) log_store(js, "renew", id);
+    pthread_mutex_lock(&js->lock);
+    if (!sl->busy || sl->run != run || strcmp(sl->id, id) != 0) return; /* it ended meanwhile */
+    if (st == LJGAP_JOBSTORE_OK) {
+        sl->written = progress;
+        sl->renewed = now;
+        if (cancel) sl->asked = sl->cancel = 1;
+    } else if (st == LJGAP_JOBSTORE_LOST) {
+        sl->lost = sl->cancel = 1;
+    }
+}
+
+static void *keeper(void *arg)
+{
+    ljgap_jobs *js = arg;
+    double tick = fmin(js->cfg.progress_seconds, js->cfg.lease_seconds / 3) / 2;
+    double next_evict = ljgap_now() + EVICT_SECONDS;
+    pthread_mutex_lock(&js->lock);
+    while (!js->keeper_quit) {
+        struct timespec until = deadline_in(tick);
+        double now;
+        pthread_cond_timedwait(&js->finished, &js->lock, &until);
+        now = ljgap_now();
+        for (unsigned w = 0; w < js->n_threads && !js->keeper_quit; w++)
+            keep_slot(js, &js->slots[w], now);
+        if (now >= next_evict && !js->keeper_quit) {
+            int st;
+            next_evict = now + EVICT_SECONDS;
+            pthread_mutex_unlock(&js->lock);
+            st = ljgap_jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL);
+            if (st != LJGAP_JOBSTORE_OK) log_store(js, "cannot evict finished jobs", NULL);
+            pthread_mutex_lock(&js->lock);
+        }
+    }
+    pthread_mutex_unlock(&js->lock);
+    return NULL;
+}
+
+/* ---- the interface ---- */
+
+ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
+                             const ljgap_job_kind *kinds, size_t nkinds)
+{
+    ljgap_jobs *js;
+    pthread_condattr_t ca;
+    char host[64] = "localhost";
+    if (!c || !store || !kinds || !nkinds || c->workers < 1 || c->queue_cap < 1 ||
+        !(c->keep_seconds >= 0) || !(c->lease_seconds > 0 && c->lease_seconds <= 86400) ||
+        !(c->progress_seconds > 0 && c->progress_seconds <= 3600) ||
+        !(c->poll_seconds > 0 && c->poll_seconds <= 3600))
+        return NULL;
+    for (size_t i = 0; i < nkinds; i++)
+        if (!ljgap_job_kind_valid(kinds[i].name) || !kinds[i].run) return NULL;
+    if (!(js = calloc(1, sizeof *js))) return NULL;
+    js->cfg = *c;
+    js->store = store;
+    js->nkinds = nkinds;
+    if (!(js->kinds = malloc(nkinds * sizeof *kinds)) ||
+        !(js->slots = calloc(c->workers, sizeof *js->slots)) ||
+        !(js->threads = calloc(c->workers, sizeof *js->threads))) {
+        free(js->kinds);
+        free(js->slots);
+        free(js);
+        return NULL;
+    }
+    memcpy(js->kinds, kinds, nkinds * sizeof *kinds);
+    gethostname(host, sizeof host - 1);
+    host[sizeof host - 1] = '\0';
+    snprintf(js->owner, sizeof js->owner, "%s:%ld", host, (long)getpid());
+    pthread_mutex_init(&js->lock, NULL);
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&js->work, &ca);
+    pthread_cond_init(&js->finished, &ca);
+    pthread_condattr_destroy(&ca);
+    for (unsigned w = 0; w < c->workers; w++)
+        js->slots[w].js = js;
+    while (js->n_threads < c->workers && pthread_create(&js->threads[js->n_threads], NULL, worker,
+                                                        &js->slots[js->n_threads]) == 0)
+        js->n_threads++;
+    js->keeper_started =
+        js->n_threads == c->workers && pthread_create(&js->keeper, NULL, keeper, js) == 0;
+    if (!js->keeper_started) {
+        ljgap_jobs_free(js);
+        return NULL;
+    }
+    return js;
+}
+
+int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t len,
+                      char id[LJGAP_JOB_ID_LEN + 1])
+{
+    char fresh[LJGAP_JOB_ID_LEN + 1];
+    int st = LJGAP_JOBSTORE_EXISTS, stopping;
+    id[0] = '\0';
+    pthread_mutex_lock(&js->lock);
+    stopping = js->stopping;
+    pthread_mutex_unlock(&js->lock);
+    if (stopping) return LJGAP_JOBS_STOPPING;
+    if (!find_kind(js, kind)) {
+        ljgap_jobstore_set_errmsg("no job kind \"%.40s\"", kind);
+        return LJGAP_JOBS_STORE;
+    }
+    /* 128 random bits: a second try is for the record, not for the odds */
+    for (int i = 0; i < 3 && st == LJGAP_JOBSTORE_EXISTS; i++) {
+        if (ljgap_job_id_new(fresh) != 0) {
+            ljgap_jobstore_set_errmsg("no random bits for a job id");
+            return LJGAP_JOBS_STORE;
+        }
+        st = ljgap_jobstore_create(js->store, fresh, kind, body, len, js->cfg.queue_cap);
+    }
+    if (st != LJGAP_JOBSTORE_OK) return map_store(st);
+    memcpy(id, fresh, sizeof fresh);
+    pthread_mutex_lock(&js->lock);
+    js->submitted++;
+    pthread_cond_signal(&js->work);
+    pthread_mutex_unlock(&js->lock);
+    return LJGAP_JOBS_OK;
+}
+
+/* Has finished job rec outlived keep_seconds? (Eviction removes it soon; until then it is
+ * not shown.) */
+static int expired(const ljgap_jobs *js, const ljgap_job_record *rec)
+{
+    return rec->state >= LJGAP_JOB_DONE && rec->finished > 0 &&
+           rec->now - rec->finished > js->cfg.keep_seconds;
+}
+
+/* The status of rec into *json; the status code. */
+static int render(ljgap_jobs *js, const ljgap_job_record *rec, char **json)
+{
+    if (expired(js, rec)) return LJGAP_JOBS_UNKNOWN;
+    return (*json = ljgap_job_status_json(rec)) ? LJGAP_JOBS_OK : LJGAP_JOBS_NOMEM;
+}
+
+int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json)
+{
+    ljgap_job_record rec;
+    int st;
+    *json = NULL;
+    st = map_store(ljgap_jobstore_get(js->store, id, &rec));
+    if (st == LJGAP_JOBS_OK) st = render(js, &rec, json);
+    ljgap_job_record_clear(&rec);
     return st;
 }
 
-void ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running)
+int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final)
 {
-    pthread_mutex_lock(&js->lock);
-    *queued = js->n_queued;
-    *running = js->n_running;
-    pthread_mutex_unlock(&js->lock);
+    double until = ljgap_now() + (wait_s > 0 ? fmin(wait_s, 1e6) : 0);
+    ljgap_job_record rec;
+    int st;
+    *json = NULL;
+    *final = 0;
+    st = map_store(ljgap_jobstore_cancel(js->store, id, &rec));
+    if (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING) {
+        pthread_mutex_lock(&js->lock);
+        for (unsigned w = 0; w < js->n_threads; w++) {
+            slot *sl = &js->slots[w];
+            if (sl->busy && strcmp(sl->id, rec.id) == 0) sl->asked = sl->cancel = 1;
+        }
+        pthread_mutex_unlock(&js->lock);
+    }
+    while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap_now() < until) {
+        /* woken when a job here returns; a job running elsewhere is looked at every 0.1 s */
+        struct timespec t = deadline_in(fmin(until - ljgap_now(), 0.1));
+        pthread_mutex_lock(&js->lock);
+        pthread_cond_timedwait(&js->finished, &js->lock, &t);
+        pthread_mutex_unlock(&js->lock);
+        ljgap_job_record_clear(&rec);
+        st = map_store(ljgap_jobstore_get(js->store, id, &rec));
+    }
+    if (st == LJGAP_JOBS_OK) {
+        *final = rec.state != LJGAP_JOB_RUNNING && rec.state != LJGAP_JOB_QUEUED;
+        st = render(js, &rec, json);
+    }
+    ljgap_job_record_clear(&rec);
+    return st;
+}
+
+int ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running)
+{
+    return map_store(ljgap_jobstore_counts(js->store, queued, running));
 }
 
 void ljgap_jobs_shutdown(ljgap_jobs *js)
 {
     pthread_mutex_lock(&js->lock);
     js->stopping = 1;
-    for (job *j = js->head; j; j = j->next) {
-        if (j->state == JOB_QUEUED) {
-            release_arg(j);
-            finish(js, j, JOB_CANCELLED, 0, NULL);
-        } else if (j->state == JOB_RUNNING) {
-            j->cancel = 1;
-        }
-    }
+    for (unsigned w = 0; w < js->n_threads; w++)
+        if (js->slots[w].busy) js->slots[w].cancel = 1;
     pthread_cond_broadcast(&js->work);
     pthread_mutex_unlock(&js->lock);
+}
+
+static int any_busy(const ljgap_jobs *js)
+{
+    for (unsigned w = 0; w < js->n_threads; w++)
+        if (js->slots[w].busy) return 1;
+    return 0;
 }
 
 int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s)
@@ -390,9 +505,9 @@ int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s)
     struct timespec until = deadline_in(wait_s);
     int idle;
     pthread_mutex_lock(&js->lock);
-    while (js->n_running > 0 && pthread_cond_timedwait(&js->finished, &js->lock, &until) == 0)
+    while (any_busy(js) && pthread_cond_timedwait(&js->finished, &js->lock, &until) == 0)
         ;
-    idle = js->n_running == 0;
+    idle = !any_busy(js);
     pthread_mutex_unlock(&js->lock);
     return idle;
 }
@@ -403,13 +518,18 @@ void ljgap_jobs_free(ljgap_jobs *js)
     ljgap_jobs_shutdown(js);
     for (unsigned t = 0; t < js->n_threads; t++)
         pthread_join(js->threads[t], NULL);
-    for (job *j = js->head, *next; j; j = next) {
-        next = j->next;
-        job_free(j);
+    if (js->keeper_started) {
+        pthread_mutex_lock(&js->lock);
+        js->keeper_quit = 1;
+        pthread_cond_broadcast(&js->finished);
+        pthread_mutex_unlock(&js->lock);
+        pthread_join(js->keeper, NULL);
     }
     pthread_cond_destroy(&js->work);
     pthread_cond_destroy(&js->finished);
     pthread_mutex_destroy(&js->lock);
     free(js->threads);
+    free(js->slots);
+    free(js->kinds);
     free(js);
 }

@@ -1,46 +1,66 @@
-/* jobs.h -- background jobs for the HTTP daemon: a bounded queue, worker threads, a store.
+/* jobs.h -- background jobs for the HTTP daemon: worker threads running jobs from a job store.
  *
- * A job is a function that writes one reply (handler.h): the daemon submits numerical-model
- * runs (ljgap_sim_request_run) and clients poll them by id. The store knows nothing of
- * physics or HTTP; it only runs functions, keeps their answers and counts progress.
+ * A job is a request body of some kind (the daemon has one, "simulation") kept in a job store
+ * (jobstore.h: SQLite today). Submitting writes it there; worker threads claim jobs from the
+ * store, run the kind's function on the stored body and write progress and the answer back;
+ * clients poll by id. Since a job is its stored body, a daemon that restarts (or crashes)
+ * runs the jobs that were queued or running again from the start, under the same ids, and
+ * keeps serving the finished ones until they expire. The runner knows nothing of physics or
+ * HTTP: kinds are functions given at start.
  *
- *   ljgap_jobs *js = ljgap_jobs_alloc(&cfg);        workers start here
- *   ljgap_jobs_submit(js, run, arg, free_arg, id);  queued, or LJGAP_JOBS_FULL
- *   ljgap_jobs_status(js, id, &json);               {"id","status","progress",...}
- *   ljgap_jobs_cancel(js, id, wait_s, &json);       cancel, then the same status object
- *   ljgap_jobs_shutdown(js);                        at SIGTERM: cancel everything
- *   ljgap_jobs_free(js);                            join the workers, free everything
+ *   ljgap_jobs *js = ljgap_jobs_alloc(&cfg, store, kinds, nkinds);   workers start here
+ *   ljgap_jobs_submit(js, "simulation", body, len, id);   durable, or LJGAP_JOBS_FULL
+ *   ljgap_jobs_status(js, id, &json);                     {"id","status","progress",...}
+ *   ljgap_jobs_cancel(js, id, wait_s, &json, &final);     cancel, then the same status object
+ *   ljgap_jobs_shutdown(js);                              at SIGTERM: stop the running ones
+ *   ljgap_jobs_free(js);                                  join the workers
  *
- * States: queued -> running -> done | failed | cancelled (queued -> cancelled directly when
- * cancelled before a worker takes it). A run whose reply is 2xx is done; a run that returns
- * a problem is failed, or cancelled when its cancel flag was raised. Finished jobs are kept
- * for keep_seconds, and at most keep_done of them (the oldest finished goes first); queued
- * and running jobs are never evicted. Every function is thread-safe.
+ * States (jobstore.h): queued -> running -> done | failed | cancelled. A run whose reply is
+ * 2xx is done; a run that returns a problem is failed, or cancelled when a cancel was asked.
+ * At shutdown the running jobs are stopped and put back in the queue (they run again at the
+ * next start); queued jobs stay queued. A job whose runs were lost max_lost times (the daemon
+ * died each time) fails with a job-abandoned problem instead of running again, so one job
+ * that crashes the daemon cannot keep it in a restart loop. Finished jobs are kept for
+ * keep_seconds, and at most keep_done of them. Every function is thread-safe.
+ *
+ * Threads: `workers` workers, and one keeper that every fraction of a second writes the running
+ * jobs' progress, renews their leases and reads back cancel requests made elsewhere (so a
+ * progress callback costs no I/O and a job whose computation reports nothing keeps its lease),
+ * and evicts expired jobs now and then.
  */
 #ifndef LJGAP_JOBS_H
 #define LJGAP_JOBS_H
 
 #include "handler.h"
+#include "jobstore.h"
 
 #include <stddef.h>
-
-#define LJGAP_JOB_ID_LEN 32 /* hex digits of a job id: 128 random bits */
 
 /* What a running job may look at: its cancel flag and where to report progress. */
 typedef struct {
     const volatile int *cancel;                   /* nonzero: stop early (ljgap_sim_opts.cancel) */
-    void (*progress)(void *ctx, double fraction); /* fraction done, 0..1; cheap */
+    void (*progress)(void *ctx, double fraction); /* fraction done, 0..1; cheap, no I/O */
     void *ctx;                                    /* first argument of progress */
 } ljgap_job_ctl;
 
-/* The work of a job: fills *out (a 2xx JSON answer, or a problem). */
-typedef void (*ljgap_job_fn)(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out);
+/* A kind of job: its name and the function that runs a stored request body of that kind,
+ * filling *out (a 2xx JSON answer, or a problem; a body that does not parse is a problem). */
+typedef struct {
+    const char *name; /* jobstore.h kind name, e.g. "simulation" */
+    void (*run)(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
+                ljgap_reply *out);
+    void *ctx; /* first argument of run */
+} ljgap_job_kind;
 
 typedef struct {
-    unsigned workers;    /* worker threads, jobs running at once (default 1) */
-    unsigned queue_cap;  /* jobs waiting for a worker; more get LJGAP_JOBS_FULL (default 8) */
-    unsigned keep_done;  /* finished jobs kept (default 64) */
-    double keep_seconds; /* how long a finished job is kept (default 3600 s) */
+    unsigned workers;        /* worker threads, jobs running at once (default 1) */
+    unsigned queue_cap;      /* jobs waiting; more get LJGAP_JOBS_FULL (default 8) */
+    unsigned keep_done;      /* finished jobs kept (default 64) */
+    double keep_seconds;     /* how long a finished job is kept (default 3600 s) */
+    double lease_seconds;    /* a running job's lease, renewed every third of it (default 30) */
+    double progress_seconds; /* progress is written at most this often (default 0.5 s) */
+    double poll_seconds;     /* idle workers look at the store this often (default 1 s) */
+    unsigned max_lost;       /* a job whose runs were lost this often fails (default 3) */
 } ljgap_jobs_config;
 
 void ljgap_jobs_config_default(ljgap_jobs_config *c);
@@ -54,40 +74,43 @@ enum {
     LJGAP_JOBS_STOPPING = 2, /* submit: shutting down, no new jobs */
     LJGAP_JOBS_UNKNOWN = 3,  /* status/cancel: no job with that id (never was, or evicted) */
     LJGAP_JOBS_NOMEM = 4,    /* an allocation failed */
+    LJGAP_JOBS_STORE = 5,    /* the job store failed: ljgap_jobstore_errmsg() says why */
 };
 
-/* Starts the workers; NULL if memory or threads run out (nothing is left behind). */
-ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c);
+/* Starts the workers on store (which stays the caller's, to close after ljgap_jobs_free).
+ * kinds[0..nkinds) are copied. NULL if the configuration is bad or memory or threads run
+ * out (nothing is left behind). */
+ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
+                             const ljgap_job_kind *kinds, size_t nkinds);
 
-/* Queues run(arg). The store owns arg from here on, whatever the result, and releases it
- * with free_arg (may be NULL) once the job has run or was cancelled. id receives the new id
- * (LJGAP_JOB_ID_LEN hex digits and a NUL). */
-int ljgap_jobs_submit(ljgap_jobs *js, ljgap_job_fn run, void *arg, void (*free_arg)(void *),
+/* Stores a job of the given kind (one of the kinds given at alloc) with the request body,
+ * queued. LJGAP_JOBS_OK means it is committed to the store: it survives a crash from here on.
+ * id receives its id (LJGAP_JOB_ID_LEN hex digits and a NUL; "" on failure). */
+int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t len,
                       char id[LJGAP_JOB_ID_LEN + 1]);
 
-/* The status object of job id as a malloc'd JSON string (one line):
- *   {"id","status","progress","elapsed_ms"[,"result"][,"problem"]}
- * progress is 0..1, elapsed_ms the running time so far (0 while queued), result the run's
- * answer when done, problem its problem when failed (or cancelled while running). */
+/* The status object of job id as a malloc'd JSON string (jobstatus.h). */
 int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json);
 
-/* Cancels job id: a queued job is cancelled at once; a running one has its cancel flag
- * raised and is waited for up to wait_s seconds; a finished one is left as it is. *json
- * receives the status afterwards (as ljgap_jobs_status); *final is 1 when the job has
- * finished (in any state), 0 when it is still running. */
+/* Cancels job id: a queued job is cancelled at once; a running one is told to stop (at once
+ * when it runs here, at its next lease renewal elsewhere) and waited for up to wait_s seconds;
+ * a finished one is left as it is. *json receives the status afterwards (as
+ * ljgap_jobs_status); *final is 1 when the job has finished (in any state), 0 when it is still
+ * running. */
 int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final);
 
-/* Number of jobs queued and running now. */
-void ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running);
+/* Number of jobs queued and running now (in the whole store); 0 or LJGAP_JOBS_STORE. */
+int ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running);
 
-/* Refuses new jobs, cancels the queued ones and raises the cancel flag of the running ones.
- * Returns at once. */
+/* Refuses new jobs, stops claiming and raises the cancel flag of the jobs running here, which
+ * go back to the queue when they return. Returns at once. */
 void ljgap_jobs_shutdown(ljgap_jobs *js);
 
-/* Waits up to wait_s seconds for the running jobs to return; 1 when none is running. */
+/* Waits up to wait_s seconds for the jobs running here to return; 1 when none is running. */
 int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s);
 
-/* Shuts down (if not yet), joins the workers and frees everything. NULL is fine. */
+/* Shuts down (if not yet), joins the threads and frees everything but the store. NULL is
+ * fine. */
 void ljgap_jobs_free(ljgap_jobs *js);
 
 #endif

@@ -19,7 +19,8 @@ static void usage(FILE *f)
         f,
         "usage: ljgapd [--port N] [--bind ADDR] [--web DIR] [--compute-slots N] [--queue N]\n"
         "              [--queue-wait S] [--max-seconds S] [--connections N]\n"
-        "              [--client-connections N] [--trust-proxy] [more: see below]\n"
+        "              [--client-connections N] [--trust-proxy] [--state-dir DIR]\n"
+        "              [more: see below]\n"
         "Serves the ljgap calculations over HTTP (see /openapi.json).\n"
         "Listening\n"
         "  --port N              TCP port; 0 picks a free one (default 8080)\n"
@@ -54,6 +55,11 @@ static void usage(FILE *f)
         "  --job-queue N         simulation jobs waiting; more get 503 + Retry-After (default 8)\n"
         "  --job-keep N          finished jobs kept for polling, for at most an hour (default 64)\n"
         "  --job-seconds N       wall-time cap of one simulation (default 600)\n"
+        "  --state-dir DIR       keep the simulation jobs in DIR/jobs.sqlite, so that queued,\n"
+        "                        running and finished jobs survive a restart or a crash; one\n"
+        "                        ljgapd per DIR (default: $STATE_DIRECTORY as systemd sets it,\n"
+        "                        else $XDG_STATE_HOME/ljgapd, else ~/.local/state/ljgapd); a\n"
+        "                        DIR that cannot be used is exit status 2\n"
         "The first line on stdout is 'listening on http://HOST:PORT/'; one log line per\n"
         "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n");
 }
@@ -129,6 +135,7 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
         {"job-queue", required_argument, NULL, 'Q'},
         {"job-keep", required_argument, NULL, 'K'},
         {"job-seconds", required_argument, NULL, 'S'},
+        {"state-dir", required_argument, NULL, 'D'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -195,6 +202,10 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             break;
         case 'S':
             bad = parse_uint(optarg, 1, 86400, &c->job_seconds);
+            break;
+        case 'D':
+            c->state_dir = optarg;
+            bad = !optarg[0];
             break;
         case 'h':
             usage(stdout);

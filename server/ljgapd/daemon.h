@@ -20,6 +20,7 @@
 #include "handler.h"
 #include "http_cache.h"
 #include "jobs.h"
+#include "jobstore.h"
 #include "pool.h"
 
 #include <microhttpd.h>
@@ -55,6 +56,7 @@ typedef struct {
     unsigned job_seconds;        /* wall-time cap of one simulation (600) */
     unsigned job_retry;          /* Retry-After seconds when the job queue is full (10) */
     double cancel_wait_s;        /* DELETE waits this long for a running job to stop (2) */
+    const char *state_dir;       /* where the jobs are kept (--state-dir, or main.c's default) */
 } ljgapd_config;
 
 /* Fills c from argv (defaults first); -1 after printing why (exit 2), 1 after --help (exit 0). */
@@ -65,6 +67,7 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv);
 typedef struct {
     ljgapd_config cfg;
     http_cache *cache;       /* answers of earlier identical requests */
+    ljgap_jobstore *store;   /* where the jobs are kept (jobstore.h) */
     ljgap_jobs *jobs;        /* simulation jobs */
     pool *slots;             /* compute slots and their wait queue */
     pool *ops;               /* threads for job-store calls (they may wait on the store) */
@@ -134,6 +137,10 @@ struct route {
     size_t text_max;                 /* also takes a text/plain or text/csv body of at most this
                                       * many bytes, with its query (0: JSON only) */
 };
+
+/* The kinds of job the daemon runs (one: "simulation"), for ljgap_jobs_alloc. */
+extern const ljgap_job_kind ljgapd_job_kinds[];
+extern const size_t ljgapd_job_nkinds;
 
 /* The row for url: first match wins; the last row (path NULL) answers 404. */
 const struct route *route_find(const char *url);

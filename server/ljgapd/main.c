@@ -13,11 +13,14 @@
  *     request whose client hangs up leaves the queue, or has its computation cancelled.
  *   - a cache of identical requests' answers, served without a slot; /healthz, /version,
  *     /openapi.json and the page's files never wait.
- *   - simulation jobs run in the background (jobs.h).
+ *   - simulation jobs are kept in SQLite in the state directory (--state-dir; jobstore.h), so
+ *     they survive a restart or a crash, and run in the background (jobs.h). A state directory
+ *     that cannot be used stops the start with exit status 2: there is no job store in memory.
  *   - shutdown: SIGINT/SIGTERM are taken by sigwait() here. The daemon stops accepting
- *     (MHD_quiesce_daemon); requests waiting for a slot get 503; computations may finish for a
- *     grace period, then their cancel flags are raised; everything has stopped within 10 s, and
- *     it exits 0.
+ *     (MHD_quiesce_daemon); running simulations stop and go back to the queue (the next start
+ *     runs them); requests waiting for a slot get 503; computations may finish for a grace
+ *     period, then their cancel flags are raised; everything has stopped within 10 s, and it
+ *     exits 0.
  */
 #include "daemon.h"
 #include "ljgap.h"
@@ -69,6 +72,44 @@ static void fit_file_limit(char *note, size_t n)
     else
         snprintf(note, n, "open-file limit %llu (raised from %llu)",
                  (unsigned long long)rl.rlim_cur, (unsigned long long)was);
+}
+
+/* The state directory when --state-dir is not given: systemd's StateDirectory= (the first of
+ * $STATE_DIRECTORY), else the XDG state home ($XDG_STATE_HOME, or ~/.local/state), in ljgapd/:
+ * never the current directory, so jobs do not depend on where the daemon was started from.
+ * NULL when there is none (no usable $HOME either). */
+static const char *default_state_dir(char *buf, size_t n)
+{
+    const char *sd = getenv("STATE_DIRECTORY"), *xdg = getenv("XDG_STATE_HOME");
+    const char *home = getenv("HOME");
+    int len = -1;
+    if (sd && sd[0] == '/')
+        len = snprintf(buf, n, "%.*s", (int)strcspn(sd, ":"), sd);
+    else if (xdg && xdg[0] == '/') /* the XDG spec ignores relative paths */
+        len = snprintf(buf, n, "%s/ljgapd", xdg);
+    else if (home && home[0] == '/')
+        len = snprintf(buf, n, "%s/.local/state/ljgapd", home);
+    return len > 0 && (size_t)len < n ? buf : NULL;
+}
+
+/* Opens the job store in cfg.state_dir (or the default); 0, or -1 with the reason said. */
+static int store_open(char *buf, size_t n)
+{
+    char err[600];
+    unsigned queued = 0, running = 0;
+    if (!srv.cfg.state_dir && !(srv.cfg.state_dir = default_state_dir(buf, n))) {
+        fprintf(stderr, "ljgapd: no state directory: give --state-dir DIR (neither "
+                        "$STATE_DIRECTORY, $XDG_STATE_HOME nor $HOME is set)\n");
+        return -1;
+    }
+    if (ljgap_jobstore_open_sqlite(srv.cfg.state_dir, &srv.store, err, sizeof err) !=
+        LJGAP_JOBSTORE_OK) {
+        fprintf(stderr, "ljgapd: cannot use the state directory: %s\n", err);
+        return -1;
+    }
+    ljgap_jobstore_counts(srv.store, &queued, &running);
+    fprintf(stderr, "ljgapd: jobs kept in %s/jobs.sqlite (%u queued)\n", srv.cfg.state_dir, queued);
+    return 0;
 }
 
 static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
@@ -141,7 +182,7 @@ int main(int argc, char **argv)
     struct MHD_Daemon *d = NULL;
     ljgap_limits limits;
     sigset_t sigs;
-    char host[INET6_ADDRSTRLEN + 3], files[96];
+    char host[INET6_ADDRSTRLEN + 3], files[96], state_dir[4096];
     struct timespec t_sig;
     MHD_socket lfd;
     ljgapd_config *cfg = &srv.cfg;
@@ -159,6 +200,7 @@ int main(int argc, char **argv)
     sigaddset(&sigs, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &sigs, NULL);
     signal(SIGPIPE, SIG_IGN);
+    if (store_open(state_dir, sizeof state_dir) != 0) return 2; /* never a job store in memory */
 
     ljgap_limits_default(&limits);
     limits.max_seconds = cfg->max_seconds;
@@ -170,7 +212,7 @@ int main(int argc, char **argv)
     slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait};
     ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait};
     srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
-    srv.jobs = ljgap_jobs_alloc(&cfg->jobs);
+    srv.jobs = ljgap_jobs_alloc(&cfg->jobs, srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
     srv.slots = pool_start(&slots_cfg);
     srv.ops = pool_start(&ops_cfg);
     srv.conns = conns_start(cfg->receive_s);
@@ -204,7 +246,7 @@ int main(int argc, char **argv)
     fprintf(stderr, "ljgapd: %s, stopping (%u requests in flight)\n", strsignal(sig),
             atomic_load(&srv.inflight));
     lfd = MHD_quiesce_daemon(d);
-    ljgap_jobs_shutdown(srv.jobs); /* background jobs have no client waiting: cancel them now */
+    ljgap_jobs_shutdown(srv.jobs); /* no client waits for jobs: stop them now (they run again) */
     /* Waiting requests get 503 now; computations may finish for grace_s, then are cancelled.
      * Every suspended connection must be resumed before MHD_stop_daemon. */
     if (!pool_stop(srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
@@ -230,6 +272,7 @@ end:
     pool_free(srv.ops);
     conns_free(srv.conns);
     ljgap_jobs_free(srv.jobs);
+    ljgap_jobstore_close(srv.store);
     fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
     http_cache_free(srv.cache);
     return rc;

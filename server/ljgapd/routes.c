@@ -11,13 +11,16 @@
  * text/plain or text/csv of up to LJGAP_TEXT_MAX_BYTES with its query (ljgap_handle_text);
  * every other body route keeps JSON and --max-body.
  *
- * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and queues
- * a numerical-model run in the job store (jobs.h: --job-workers threads, a queue of
- * --job-queue, 503 with Retry-After when full); 202 gives the job's id and its Location.
+ * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and stores
+ * the request as a job in the job store (jobstore.h: SQLite in --state-dir, so jobs survive a
+ * restart); 202, with the job's id and its Location, only once the job is committed. Worker
+ * threads run the stored requests (jobs.h: --job-workers threads, a queue of --job-queue, 503
+ * with Retry-After when full, or with the problem job-store when the store fails).
  * GET /v1/simulations/ID polls it (status, progress, then result or problem), DELETE cancels
  * it (200 once it has ended, 202 while it is still stopping).
  */
 #include "daemon.h"
+#include "jobstatus.h"
 #include "ljgap.h"
 
 #include <cjson/cJSON.h>
@@ -80,16 +83,21 @@ static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
 
 #define SIM_PATH "/v1/simulations"
 
-static void sim_job_run(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out)
+#define SIM_KIND "simulation" /* the job kind of a simulation in the store */
+
+/* A stored simulation request, parsed again (so a restarted daemon can run it) and run. */
+static void sim_job_run(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
+                        ljgap_reply *out)
 {
     ljgap_sim_control sc = {(double)srv.cfg.job_seconds, ctl->cancel, ctl->progress, ctl->ctx};
-    ljgap_sim_request_run(arg, &sc, out);
+    ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, out);
+    if (!sr) return; /* the problem is in *out */
+    ljgap_sim_request_run(sr, &sc, out);
+    ljgap_sim_request_free(sr);
 }
 
-static void sim_job_free(void *arg)
-{
-    ljgap_sim_request_free(arg);
-}
+const ljgap_job_kind ljgapd_job_kinds[] = {{SIM_KIND, sim_job_run, NULL}};
+const size_t ljgapd_job_nkinds = sizeof ljgapd_job_kinds / sizeof ljgapd_job_kinds[0];
 
 /* Moves a malloc'd JSON string into out as a 2xx answer. */
 static void work_json(work_reply *out, int status, char *json)
@@ -106,14 +114,35 @@ static void work_oom(work_reply *out)
     snprintf(out->detail, sizeof out->detail, "out of memory");
 }
 
-/* POST /v1/simulations: validate, queue, 202 with the job's status and its Location. */
+/* 503 job-store with Retry-After: the store failed (its reason is logged, not sent). */
+static void work_store_failed(work_reply *out)
+{
+    char *p = ljgap_job_problem(MHD_HTTP_SERVICE_UNAVAILABLE, "job-store", "Job store unavailable",
+                                "the job store cannot be read or written just now; retry after "
+                                "the given seconds");
+    fprintf(stderr, "ljgapd: job store: %s\n", ljgap_jobstore_errmsg());
+    if (!p) {
+        work_oom(out);
+        return;
+    }
+    out->rep.status = MHD_HTTP_SERVICE_UNAVAILABLE;
+    out->rep.body = p;
+    out->rep.len = strlen(p);
+    out->rep.content_type = "application/problem+json";
+    out->header = MHD_HTTP_HEADER_RETRY_AFTER;
+    snprintf(out->value, sizeof out->value, "%u", srv.cfg.job_retry);
+}
+
+/* POST /v1/simulations: validate, store, 202 with the job's status and its Location. */
 static void sim_submit_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_sim_request *sr = ljgap_sim_request_parse(r->body ? r->body : "", r->len, &out->rep);
+    const char *body = r->body ? r->body : "";
+    ljgap_sim_request *sr = ljgap_sim_request_parse(body, r->len, &out->rep);
     char id[LJGAP_JOB_ID_LEN + 1], *status = NULL;
 
-    if (!sr) return; /* out->rep holds the problem */
-    switch (ljgap_jobs_submit(srv.jobs, sim_job_run, sr, sim_job_free, id)) {
+    if (!sr) return;            /* out->rep holds the problem */
+    ljgap_sim_request_free(sr); /* valid: the job is its body, parsed again when it runs */
+    switch (ljgap_jobs_submit(srv.jobs, SIM_KIND, body, r->len, id)) {
     case LJGAP_JOBS_OK:
         break;
     case LJGAP_JOBS_FULL:
@@ -131,13 +160,22 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
         out->header = MHD_HTTP_HEADER_RETRY_AFTER;
         snprintf(out->value, sizeof out->value, "%u", srv.cfg.retry_after);
         return;
+    case LJGAP_JOBS_STORE:
+        work_store_failed(out);
+        return;
     default:
         work_oom(out);
         return;
     }
-    /* a job just queued is not evicted (only finished ones are, and keep_done >= 1) */
-    if (ljgap_jobs_status(srv.jobs, id, &status) != LJGAP_JOBS_OK) {
+    /* a job just stored is not evicted (only finished ones are) */
+    switch (ljgap_jobs_status(srv.jobs, id, &status)) {
+    case LJGAP_JOBS_OK:
+        break;
+    case LJGAP_JOBS_NOMEM:
         work_oom(out);
+        return;
+    default:
+        work_store_failed(out);
         return;
     }
     work_json(out, MHD_HTTP_ACCEPTED, status);
@@ -173,6 +211,10 @@ static void sim_job_work(request *r, const volatile int *cancel, work_reply *out
                  "no simulation job with this id: it never existed, or it finished more than "
                  "%.0f s ago or before the last %u finished jobs",
                  srv.cfg.jobs.keep_seconds, srv.cfg.jobs.keep_done);
+        return;
+    }
+    if (st == LJGAP_JOBS_STORE) {
+        work_store_failed(out);
         return;
     }
     if (st != LJGAP_JOBS_OK) {

@@ -29,6 +29,14 @@
  * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
  * with an empty name, or 1 with a numeric address that fits the buffer, for buffers of any size.
  *
+ * The pseudo-endpoint "@jobrow" fuzzes what the daemon reads back from its job store (a
+ * database row is input too). The body's first seven lines are a job record's id, state,
+ * progress, created, started, finished and now (numbers through strtod, so inf, nan and hex
+ * come through), the rest is the stored answer (none when there are fewer lines); the record
+ * goes through ljgap_job_status_json, whose answer must be one JSON object in valid UTF-8 with
+ * finite numbers, a known status, progress in [0, 1], elapsed_ms >= 0, a result object exactly
+ * when done and a well-formed problem whenever it failed.
+ *
  * The handler's limits are lowered (fuzz_limits, and sim_control for simulations) so each
  * input runs in milliseconds; a computation that ignored them would trip libFuzzer's -timeout.
  *
@@ -37,6 +45,7 @@
  */
 #include "forwarded.h"
 #include "handler.h"
+#include "jobstatus.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -282,6 +291,83 @@ static void fuzz_forwarded(const char *body, size_t len)
     free(xff);
 }
 
+/* The next line of [*p, end) as a NUL-terminated copy in buf (cut at size - 1); 0 at the end. */
+static int next_line(const char **p, const char *end, char *buf, size_t size)
+{
+    const char *nl;
+    size_t n;
+    if (*p >= end) return 0;
+    nl = memchr(*p, '\n', (size_t)(end - *p));
+    n = (size_t)((nl ? nl : end) - *p);
+    snprintf(buf, size, "%.*s", (int)(n < size ? n : size - 1), *p);
+    *p = nl ? nl + 1 : end;
+    return 1;
+}
+
+/* "@jobrow": a stored record, shown as a status object. */
+static void fuzz_jobrow(const char *body, size_t len)
+{
+    static const char *const states[] = {"queued", "running", "done", "failed", "cancelled"};
+    const char *p = body, *end = body + len;
+    ljgap_job_record rec;
+    ljgap_reply r = {0}, pr = {0};
+    double *num[] = {&rec.progress, &rec.created, &rec.started, &rec.finished, &rec.now};
+    char line[64], state[32] = "";
+    cJSON *doc = NULL;
+    const cJSON *st, *prog, *ms, *res, *prob;
+    int known = 0, lines = 0;
+    memset(&rec, 0, sizeof rec);
+    lines += next_line(&p, end, rec.id, sizeof rec.id);
+    lines += next_line(&p, end, state, sizeof state);
+    rec.state = ljgap_job_state_parse(state);
+    for (size_t i = 0; i < sizeof num / sizeof num[0]; i++)
+        if (next_line(&p, end, line, sizeof line)) *num[i] = strtod(line, NULL), lines++;
+    if (lines == 7) { /* an answer follows, possibly empty */
+        rec.answer_len = (size_t)(end - p);
+        if (!(rec.answer = malloc(rec.answer_len + 1))) return;
+        if (rec.answer_len) memcpy(rec.answer, p, rec.answer_len);
+        rec.answer[rec.answer_len] = '\0';
+    }
+    r.status = 200;
+    r.content_type = "application/json";
+    if (!(r.body = ljgap_job_status_json(&rec))) goto end; /* out of memory */
+    r.len = strlen(r.body);
+    if (!utf8_ok(r.body, r.len)) breach("@jobrow", &r, "not valid UTF-8");
+    doc = cJSON_ParseWithLength(r.body, r.len);
+    if (!cJSON_IsObject(doc)) {
+        breach("@jobrow", &r, "the status is not one JSON object");
+        goto end;
+    }
+    if (!all_finite(doc)) breach("@jobrow", &r, "a number that is not finite");
+    st = cJSON_GetObjectItemCaseSensitive(doc, "status");
+    prog = cJSON_GetObjectItemCaseSensitive(doc, "progress");
+    ms = cJSON_GetObjectItemCaseSensitive(doc, "elapsed_ms");
+    res = cJSON_GetObjectItemCaseSensitive(doc, "result");
+    prob = cJSON_GetObjectItemCaseSensitive(doc, "problem");
+    for (size_t i = 0; cJSON_IsString(st) && i < sizeof states / sizeof states[0]; i++)
+        known |= strcmp(st->valuestring, states[i]) == 0;
+    if (!known || !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "id")) ||
+        !cJSON_IsNumber(prog) || !(prog->valuedouble >= 0 && prog->valuedouble <= 1) ||
+        !cJSON_IsNumber(ms) || !(ms->valuedouble >= 0)) {
+        breach("@jobrow", &r, "no id, a status outside the five, or progress or elapsed_ms wrong");
+        goto end;
+    }
+    if ((strcmp(st->valuestring, "done") == 0) != cJSON_IsObject(res) ||
+        (strcmp(st->valuestring, "failed") == 0 && !cJSON_IsObject(prob)))
+        breach("@jobrow", &r, "a result not exactly when done, or a failure without a problem");
+    if (cJSON_IsObject(prob)) { /* checked as if it had been sent on its own */
+        const cJSON *ps = cJSON_GetObjectItemCaseSensitive(prob, "status");
+        pr = r;
+        pr.status = cJSON_IsNumber(ps) ? (int)ps->valuedouble : 0;
+        pr.content_type = "application/problem+json";
+        check_problem("@jobrow", &pr, prob, NULL, NULL);
+    }
+end:
+    cJSON_Delete(doc);
+    free(r.body);
+    ljgap_job_record_clear(&rec);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const uint8_t *nl = memchr(data, '\n', size);
@@ -299,6 +385,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (len) memcpy(body, nl + 1, len);
     if (strcmp(ep, "@x-forwarded-for") == 0) {
         fuzz_forwarded(body, len);
+        goto end;
+    }
+    if (strcmp(ep, "@jobrow") == 0) {
+        fuzz_jobrow(body, len);
         goto end;
     }
     known = ljgap_handler_has(ep);

@@ -19,35 +19,12 @@ SLOW=1 # multiplier for time bounds
 
 CHECK_PREFIX="jobs: "
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt
+. tests/lib/jobs.sh   # submit, wait_for, wait_state, jq_ok
 
-for b in "$BIN" "$CLI"; do
-    if [ ! -x "$b" ]; then
-        echo "not ok - jobs: $b is not built"
-        exit 1
-    fi
-done
-
-submit() { # submit BODY: POST /v1/simulations; sets ID from the answer
-    req POST /v1/simulations -H 'Content-Type: application/json' --data-binary "$1"
-    ID=$(jq -r '.id // empty' "$tmp/body" 2>/dev/null)
-}
 problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
     [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
         json --argjson s "$1" '.status == $s and (.type | startswith("https://ljgap.example/problems/"))
             and (.title | type == "string") and (.detail | type == "string")'
-}
-# wait_state ID STATE...: poll GET /v1/simulations/ID until its status is one of STATE (60 s)
-wait_state() {
-    local id=$1
-    shift
-    for _ in $(seq 1 $((600 * SLOW))); do
-        req GET "/v1/simulations/$id"
-        local s
-        s=$(jq -r .status "$tmp/body" 2>/dev/null)
-        for want in "$@"; do [ "$s" = "$want" ] && return 0; done
-        sleep 0.1
-    done
-    return 1
 }
 
 PSD='"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1}'
@@ -94,8 +71,8 @@ check "sigma falls with the gap on the tensile side (0 < sigma[2] < sigma[1] < s
 req POST /v1/traction -H 'Content-Type: application/json' --data-binary "{$PSD,\"g_ave\":[3,4]}"
 cp "$tmp/body" "$tmp/traction.json"
 check "sigma at g_ave = 3 and 4 within 2 % of POST /v1/traction (the continuum theory)" \
-    jq -e --slurpfile t "$tmp/traction.json" '[.result.sigma[1:3], $t[0].sigma] | transpose |
-        all(((.[0] - .[1]) | fabs) < 0.02 * (.[1] | fabs))' "$tmp/small.json" >/dev/null
+    jq_ok --slurpfile t "$tmp/traction.json" '[.result.sigma[1:3], $t[0].sigma] | transpose |
+        all(((.[0] - .[1]) | fabs) < 0.02 * (.[1] | fabs))' "$tmp/small.json"
 req HEAD "/v1/simulations/$small"
 check "HEAD /v1/simulations/ID: 200" eval '[ "$STATUS" = 200 ]'
 
@@ -105,8 +82,8 @@ echo "$SMALL" >"$tmp/small.req"
 rc=$?
 check "CLI simulations: exit 0, one line" eval '[ $rc = 0 ] && [ "$(wc -l <"$tmp/cli.json")" = 1 ]'
 check "CLI prints the result object of the HTTP job (same seed, same numbers)" \
-    jq -e --slurpfile h "$tmp/small.json" '($h[0].result | del(.elapsed_ms, .meta.elapsed_ms))
-        == del(.elapsed_ms, .meta.elapsed_ms)' "$tmp/cli.json" >/dev/null
+    jq_ok --slurpfile h "$tmp/small.json" '($h[0].result | del(.elapsed_ms, .meta.elapsed_ms))
+        == del(.elapsed_ms, .meta.elapsed_ms)' "$tmp/cli.json"
 
 # ---- cancel a running job ----
 submit "$LONG"

@@ -17,10 +17,16 @@ check() { # check DESCRIPTION COMMAND...: ok if the command succeeds
     if "$@"; then echo "ok - ${CHECK_PREFIX:-}$desc"; else echo "not ok - ${CHECK_PREFIX:-}$desc"; fi
 }
 
-# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID
+# start NAME ARGS...: run the daemon, wait for its first line, set URL and PID. Its jobs go to
+# the state directory $tmp/NAME.state unless ARGS give a --state-dir (or NO_STATE_DIR is set:
+# then the daemon picks its default).
 start() {
     local name=$1
     shift
+    case " $* " in
+    *" --state-dir "*) ;;
+    *) [ -n "${NO_STATE_DIR:-}" ] || set -- --state-dir "$tmp/$name.state" "$@" ;;
+    esac
     : >"$tmp/$name.out" # exists before the first look below, however slow the start
     $WRAP "$BIN" --port 0 "$@" >"$tmp/$name.out" 2>"$tmp/$name.err" &
     PID=$!

@@ -26,6 +26,7 @@ let origin;
 let ctx;
 let page;
 let userDir;
+let stateDir; // the daemon's job store, removed at the end
 const consoleErrors = [];
 const requests = [];
 const foreign = [];
@@ -33,7 +34,9 @@ const foreign = [];
 function startDaemon() {
   return new Promise((resolve, reject) => {
     const bin = path.join(BUILD, "ljgapd");
-    daemon = spawn(bin, ["--port", "0", "--web", "web"], { cwd: ROOT, stdio: ["ignore", "pipe", "pipe"] });
+    stateDir = fs.mkdtempSync(path.join(os.tmpdir(), "ljgap-web-state-"));
+    daemon = spawn(bin, ["--port", "0", "--web", "web", "--state-dir", stateDir],
+      { cwd: ROOT, stdio: ["ignore", "pipe", "pipe"] });
     let out = "";
     const timer = setTimeout(() => reject(new Error(`${bin} did not say where it listens`)), 10000);
     daemon.stdout.on("data", (d) => {
@@ -83,6 +86,7 @@ after(async () => {
   if (ctx) await ctx.close();
   if (daemon) daemon.kill("SIGTERM");
   if (userDir) fs.rmSync(userDir, { recursive: true, force: true });
+  if (stateDir) fs.rmSync(stateDir, { recursive: true, force: true });
 });
 
 /* Click a preset (or Compute) and wait until the status line says the run ended. */
