@@ -116,6 +116,9 @@ $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBDAEMON) $(LIBSERVER) $(LIBCORE)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
+# tests of what only the daemon links: the embedded openapi.json
+$(BUILD)/tests/test_problems: $(BUILD)/gen/openapi.o
+
 $(BUILD)/bench/%: $(BUILD)/bench/%.o $(LIBSERVER) $(LIBCORE)
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")

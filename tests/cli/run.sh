@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The command line build/ljgap against shared/docs/api.md: exit status (0 for a 2xx answer,
+# The command line build/ljgap against its contract (docs/api.md): exit status (0 for a 2xx answer,
 # 1 for a problem, 2 for usage or read errors), one line of JSON on stdout, the same answer
 # from a file as from stdin. Prints one "ok ..." or "not ok ..." line per check.
 set -u

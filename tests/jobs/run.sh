@@ -33,7 +33,7 @@ submit() { # submit BODY: POST /v1/simulations; sets ID from the answer
 }
 problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
     [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
-        json --argjson s "$1" '.status == $s and (.type | startswith("https://ljgap.example/problems/"))
+        json --argjson s "$1" '.status == $s and (.type | startswith("/problems/"))
             and (.title | type == "string") and (.detail | type == "string")'
 }
 # wait_state ID STATE...: poll GET /v1/simulations/ID until its status is one of STATE (60 s)

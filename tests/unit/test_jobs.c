@@ -66,7 +66,7 @@ static void run_fail(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out)
     (void)arg;
     (void)ctl;
     atomic_fetch_add(&started, 1);
-    reply(out, 422, "{\"type\":\"https://ljgap.example/problems/no-answer\",\"status\":422}");
+    reply(out, 422, "{\"type\":\"/problems/no-answer\",\"status\":422}");
 }
 
 /* Reports progress arg/100 (then a smaller value, to be ignored) and holds its worker until
@@ -80,7 +80,7 @@ static void run_held(void *arg, const ljgap_job_ctl *ctl, ljgap_reply *out)
         sleep_ms(1);
     if (*ctl->cancel) {
         atomic_fetch_add(&saw_stop, 1);
-        reply(out, 503, "{\"type\":\"https://ljgap.example/problems/unavailable\"}");
+        reply(out, 503, "{\"type\":\"/problems/unavailable\"}");
     } else {
         reply(out, 200, "{\"held\":true}");
     }
