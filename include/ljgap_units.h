@@ -4,8 +4,10 @@
  * E*, flat-surface work of adhesion Δγ, Lennard-Jones length ε) fixes the scales:
  *   χ = 3ε²E* /(16Δγ)   (length, m)         k̃ = χk,  g̃ = g/ε
  *   σ0 = 16Δγ/(9√3ε)   (stress, Pa, eq. 9)  P̃S(k̃) = PS(k)/(ε²χ²)
- * PSD convention: m0 = 2π∫k PS(k) dk (isotropic 2-D PSD, (22)); tools that define
- * m0 = ∫∫PS d²q with q = 2πk, or use angular wavenumbers, differ by factors of (2π)².
+ * PSD convention: k is the angular wavenumber (2π/wavelength, rad/m) and the isotropic 2-D PSD
+ * is normalised so that ∫∫PS d²k = 2π∫k PS(k) dk = m0 = h_rms² ((22); Persson's C(q)).
+ * SurfaceTopography/contact.engineering's C(q) at the same q is (2π)² PS; tools on 1/λ
+ * wavenumbers f = k/2π with ∫∫S d²f = h_rms² have S(f) = (2π)² PS(2πf) (docs/theory.md §7).
  * Conversion functions are pure arithmetic; they know nothing of JSON.
  */
 #ifndef LJGAP_UNITS_H
