@@ -11,7 +11,7 @@
  *
  * The same contract as POST /v1/NAME (docs/api.md): exit status 0 for a 2xx answer, 1 for a
  * problem (whose body is still printed on stdout), 2 when the command line is wrong or the
- * request cannot be read. A thin shell: all the work is in ljgap_handle_as. The manual page
+ * request cannot be read. A thin shell: all the work is in ljgap_handle_call. The manual page
  * is man/ljgap.1.
  */
 #include "csv.h"
@@ -158,7 +158,8 @@ int main(int argc, char **argv)
         run_simulation(body, len, &rep);
         if (csv) ljgap_csv_reply(name, &rep);
     } else {
-        ljgap_handle_as(name, csv ? "text/csv" : NULL, body, len, &rep);
+        ljgap_call call = {.accept = csv ? "text/csv" : NULL};
+        ljgap_handle_call(name, body, len, &call, &rep);
     }
     /* a CSV body ends in its own newline; a JSON one gets one */
     if (fwrite(rep.body, 1, rep.len, stdout) != rep.len ||

@@ -1,6 +1,6 @@
 /* handler.c -- the request handler: endpoint name + JSON body + Accept -> status + body.
  *
- * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle_as. It parses the
+ * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle_call. It parses the
  * body with cJSON, validates it (request.c: every bad field reported with a JSON pointer),
  * builds the PSD, calls the core (include/ljgap.h) and serialises the answer exactly as
  * docs/api.md fixes it: as JSON, or for traction, pdf and sweep as CSV when the Accept header
@@ -736,12 +736,6 @@ static int negotiate(const char *accept, int csv, ljgap_reply *out)
     return k;
 }
 
-void ljgap_handle_as(const char *endpoint, const char *accept, const char *body, size_t len,
-                     ljgap_reply *out)
-{
-    ljgap_handle_call(endpoint, body, len, NULL, out);
-}
-
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out)
 {
@@ -762,7 +756,8 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
         reply_problem(out, P_NOT_FOUND, detail, NULL);
         goto end;
     }
-    if ((form = negotiate(accept, ljgap_csv_offers(r->name), out)) < 0) goto end;
+    if ((form = negotiate(call ? call->accept : NULL, ljgap_csv_offers(r->name), out)) < 0)
+        goto end;
     if (!validate(r->ep, body, len, &j, out)) goto end;
     j.deadline = t0 + limits.max_seconds;
     j.cancel = call && call->cancel ? call->cancel : limits.cancel;
@@ -786,7 +781,7 @@ end:
 
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
 {
-    ljgap_handle_as(endpoint, NULL, body, len, out);
+    ljgap_handle_call(endpoint, body, len, NULL, out);
 }
 
 /* ---- simulations (ljgap_sim.h) ---- */

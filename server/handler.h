@@ -33,20 +33,19 @@ void ljgap_limits_default(ljgap_limits *l);
 void ljgap_handler_set_limits(const ljgap_limits *l);
 
 /* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact".
- * Unknown endpoint -> 404 problem. accept is the request's Accept header (NULL or "" when it
- * has none): traction, pdf and sweep answer text/csv when it prefers that to application/json
- * (accept.h); an Accept that allows neither form the endpoint has is a 406 problem, decided
- * before the body is read. Problems are always application/problem+json. Always fills *out
- * (status 500 with a problem body if memory runs out). Thread-safe. */
-void ljgap_handle_as(const char *endpoint, const char *accept, const char *body, size_t len,
-                     ljgap_reply *out);
-/* ljgap_handle_as with no Accept header: JSON answers. */
+ * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
+ * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
 
 /* How one call is driven, beyond the server-wide limits. Everything may be zero. */
 typedef struct {
     const volatile int *cancel; /* nonzero stops this computation (503 "unavailable" problem);
                                  * NULL: the limits' cancel flag */
+    const char *accept;         /* the request's Accept header, NULL when it has none:
+                                 * traction, pdf and sweep answer text/csv (csv.h) when it
+                                 * prefers that to application/json (accept.h); one that allows
+                                 * no form the endpoint has is a 406 problem, decided before the
+                                 * body is read. Problems are always application/problem+json. */
 } ljgap_call;
 
 /* ljgap_handle with per-call settings (call may be NULL: the same as ljgap_handle). */

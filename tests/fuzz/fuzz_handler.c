@@ -1,4 +1,4 @@
-/* fuzz_handler.c -- libFuzzer target on ljgap_handle_as, the one request handler.
+/* fuzz_handler.c -- libFuzzer target on ljgap_handle_call, the one request handler.
  *
  * An input is "ENDPOINT\nBODY" or "ENDPOINT\tACCEPT\nBODY": the first line names the endpoint
  * (adhesion, traction, pdf, sweep, contact, or anything else for a 404; "simulations" goes
@@ -331,7 +331,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         ljgap_sim_request_free(sr);
         if (r.status == 200 && accept) sim_status(accept, &r);
     } else {
-        ljgap_handle_as(ep, accept, body, len, &r);
+        ljgap_call call = {.accept = accept};
+        ljgap_handle_call(ep, body, len, &call, &r);
     }
     if (!r.body || !r.content_type) {
         breach(ep, &r, "no body or no content type");

@@ -200,6 +200,14 @@ static char *to_csv(const char *endpoint, const char *json)
     return s;
 }
 
+/* The handler with an Accept header. */
+static void handle_accept(const char *endpoint, const char *accept, const char *body, size_t len,
+                          ljgap_reply *r)
+{
+    ljgap_call call = {.accept = accept};
+    ljgap_handle_call(endpoint, body, len, &call, r);
+}
+
 /* Asks endpoint for request as JSON; returns the body (checked 200). */
 static char *ask_json(const char *endpoint, const char *request)
 {
@@ -216,7 +224,7 @@ static void check_handler_csv(const char *endpoint, const char *request, const c
 {
     ljgap_reply r;
     csv_doc a, b;
-    ljgap_handle_as(endpoint, "text/csv", request, strlen(request), &r);
+    handle_accept(endpoint, "text/csv", request, strlen(request), &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, LJGAP_CT_CSV);
     a = csv_parse(r.body);
@@ -499,32 +507,32 @@ static void test_handler_negotiates(void **state)
     ljgap_reply r;
     (void)state;
     /* adhesion has no CSV form: text/csv alone is 406, before the body is looked at */
-    ljgap_handle_as("adhesion", "text/csv", "{", 1, &r);
+    handle_accept("adhesion", "text/csv", "{", 1, &r);
     assert_int_equal(r.status, 406);
     assert_string_equal(r.content_type, "application/problem+json");
     assert_string_equal(type_of(&r), "/problems/not-acceptable");
     ljgap_reply_free(&r);
-    ljgap_handle_as("adhesion", "text/csv, */*;q=0.1", rq, strlen(rq), &r);
+    handle_accept("adhesion", "text/csv, */*;q=0.1", rq, strlen(rq), &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, "application/json");
     ljgap_reply_free(&r);
     /* problems stay JSON whatever Accept says */
-    ljgap_handle_as("traction", "text/csv", bad, strlen(bad), &r);
+    handle_accept("traction", "text/csv", bad, strlen(bad), &r);
     assert_int_equal(r.status, 422);
     assert_string_equal(r.content_type, "application/problem+json");
     ljgap_reply_free(&r);
-    ljgap_handle_as("traction", "image/png", tr, strlen(tr), &r);
+    handle_accept("traction", "image/png", tr, strlen(tr), &r);
     assert_int_equal(r.status, 406);
     ljgap_reply_free(&r);
-    ljgap_handle_as("traction", "*/*", tr, strlen(tr), &r);
+    handle_accept("traction", "*/*", tr, strlen(tr), &r);
     assert_string_equal(r.content_type, "application/json");
     ljgap_reply_free(&r);
-    ljgap_handle_as("traction", "application/json;q=0.5, text/*", tr, strlen(tr), &r);
+    handle_accept("traction", "application/json;q=0.5, text/*", tr, strlen(tr), &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, LJGAP_CT_CSV);
     ljgap_reply_free(&r);
     /* an unknown endpoint is 404 whatever Accept says */
-    ljgap_handle_as("nope", "image/png", tr, strlen(tr), &r);
+    handle_accept("nope", "image/png", tr, strlen(tr), &r);
     assert_int_equal(r.status, 404);
     ljgap_reply_free(&r);
 }

@@ -110,8 +110,8 @@ static void test_handler_types(void **state)
         cJSON *doc;
         const char *type;
         const ljgap_problem_doc *d;
-        ljgap_handle_as(cases[i].endpoint, cases[i].accept, cases[i].body, strlen(cases[i].body),
-                        &r);
+        ljgap_call call = {.accept = cases[i].accept};
+        ljgap_handle_call(cases[i].endpoint, cases[i].body, strlen(cases[i].body), &call, &r);
         doc = cJSON_Parse(r.body);
         type = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(doc, "type"));
         assert_non_null(type);
