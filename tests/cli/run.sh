@@ -39,7 +39,7 @@ check "--version exits 0" rc_is 0
 check "--version prints the version" grep -q '^ljgap [0-9]' "$tmp/out"
 run --help
 check "--help exits 0" rc_is 0
-check "--help prints usage" grep -q 'usage: ljgap NAME' "$tmp/out"
+check "--help prints usage" grep -q 'usage: ljgap \[--csv\] NAME' "$tmp/out"
 run
 check "no endpoint is a usage error (2)" rc_is 2
 run adhesion "$tmp/no-such-file"
