@@ -117,7 +117,7 @@ fi
 if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
     mkdir -p "$tmp/alone"
     if git clone -q --no-hardlinks "$ROOT" "$tmp/alone/ljgap" 2>"$tmp/clone.err" &&
-        env -u MAKEFLAGS -u MAKELEVEL nice make -s -C "$tmp/alone/ljgap" -j2 programs SANITIZE= \
+        env -u MAKEFLAGS -u MAKELEVEL nice make -s -C "$tmp/alone/ljgap" -j2 programs SANITIZE= BUILD=build \
             >"$tmp/clone.log" 2>&1; then
         echo "ok - a clone of the committed tree alone (nothing beside it) builds its programs"
         BIN=$tmp/alone/ljgap/build/ljgapd
