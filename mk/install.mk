@@ -25,10 +25,14 @@ INSTALL_FILES := $(BINDIR)/ljgap $(SBINDIR)/ljgapd \
                  $(LIBDIR)/pkgconfig/ljgap.pc $(MANDIR)/man1/ljgap.1 $(MANDIR)/man8/ljgapd.8 \
                  $(UNITDIR)/ljgapd.service
 
-# The installed paths put into the pkg-config file and the unit.
-SUBST := sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
-             -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@SBINDIR@|$(SBINDIR)|g' \
-             -e 's|@VERSION@|$(VERSION)|g'
+# The installed paths put into the pkg-config file and the unit. The unit passes systemd's
+# state directory as the job store's --state-dir, when the ljgapd being installed has it (it
+# arrives with the persistent job store; an ljgapd without it would refuse to start).
+SUBST = sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
+            -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@SBINDIR@|$(SBINDIR)|g' \
+            -e 's|@VERSION@|$(VERSION)|g' \
+            -e "s|@STATE_DIR_ARGS@|$$($(BUILD)/ljgapd --help | grep -q -- --state-dir && \
+                 echo ' --state-dir $${STATE_DIRECTORY}')|g"
 
 .PHONY: install uninstall
 install: $(PROGS) $(LIBCORE) $(SHLIB)
