@@ -24,6 +24,7 @@ PORT ?= 8080
 #   ALL_EXTRA                        more things `make all` builds
 #   TEST_PREP                        things built or fetched before the test suites run
 #   RUN_PREP                         things `make run` needs built
+#   EXTRA_LIBS                       libraries pkg-config does not name (linked before it)
 PKGS := libmicrohttpd libcjson gsl fftw3
 DEBS := pkg-config libmicrohttpd-dev libcjson-dev libgsl-dev libfftw3-dev
 CMDS :=
@@ -37,6 +38,7 @@ FUZZ_CMDS :=
 ALL_EXTRA :=
 TEST_PREP :=
 RUN_PREP :=
+EXTRA_LIBS :=
 
 ifdef SANITIZE
 BUILD ?= build/san
@@ -90,7 +92,7 @@ WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-pro
 ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore \
               -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
-LDLIBS := $(PKG_LIBS) -lpthread -lm
+LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm
 ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)
 
 UNIT_SRC := $(wildcard tests/unit/*.c)
@@ -124,7 +126,7 @@ $(LIBDAEMON): $(DAEMON_OBJ)
 $(SHLIB): $(CORE_SRC:%.c=$(BUILD)/pic/%.o)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) -shared -Wl,-soname,$(SONAME) $^ \
-	  $(shell pkg-config --libs gsl fftw3 2>/dev/null) -lpthread -lm -o $@
+	  $(EXTRA_LIBS) $(shell pkg-config --libs gsl fftw3 2>/dev/null) -lpthread -lm -o $@
 
 $(BUILD)/ljgap: $(BUILD)/server/cli.o $(LIBSERVER) $(LIBCORE)
 	@$(if $(Q),echo "  LD      $@")

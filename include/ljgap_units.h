@@ -7,7 +7,8 @@
  * PSD convention: k is the angular wavenumber (2π/wavelength, rad/m) and the isotropic 2-D PSD
  * is normalised so that ∫∫PS d²k = 2π∫k PS(k) dk = m0 = h_rms² ((22); Persson's C(q)).
  * SurfaceTopography/contact.engineering's C(q) at the same q is (2π)² PS; tools on 1/λ
- * wavenumbers f = k/2π with ∫∫S d²f = h_rms² have S(f) = (2π)² PS(2πf) (docs/theory.md §7).
+ * wavenumbers f = k/2π with ∫∫S d²f = h_rms² have S(f) = (2π)² PS(2πf) (docs/theory.md §7;
+ * docs/topography.md for height maps).
  * Conversion functions are pure arithmetic; they know nothing of JSON.
  */
 #ifndef LJGAP_UNITS_H

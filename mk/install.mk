@@ -30,7 +30,7 @@ INSTALL_FILES := $(BINDIR)/ljgap $(SBINDIR)/ljgapd \
 # arrives with the persistent job store; an ljgapd without it would refuse to start).
 SUBST = sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' \
             -e 's|@INCLUDEDIR@|$(INCLUDEDIR)|g' -e 's|@SBINDIR@|$(SBINDIR)|g' \
-            -e 's|@VERSION@|$(VERSION)|g' \
+            -e 's|@VERSION@|$(VERSION)|g' -e 's|@EXTRA_LIBS@|$(strip $(EXTRA_LIBS))|g' \
             -e "s|@STATE_DIR_ARGS@|$$($(BUILD)/ljgapd --help | grep -q -- --state-dir && \
                  echo ' --state-dir $${STATE_DIRECTORY}')|g"
 

@@ -2,17 +2,22 @@
  *
  *   ljgap NAME [FILE]     read the request for endpoint NAME from FILE (or stdin), print the
  *                         answer body (one line) on stdout
+ *   ljgap psd --dx M [--dy M] [--periodic] [--E_star PA ...] [FILE]
+ *                         the PSD of a height matrix in text (FILE or stdin: one row a line,
+ *                         heights in m; POST /v1/psd with text/plain): the options are the
+ *                         query parameters (--NAME VALUE or --NAME=VALUE; --periodic alone
+ *                         means periodic=true), handed to ljgap_handle_text
  *   ljgap simulations [FILE]   run one numerical-model job in the foreground (the body of
  *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
  *                         a progress bar when it is a terminal (nothing otherwise, so logs and
  *                         pipes stay clean); Ctrl-C cancels the run (a 503 problem, exit 1)
- *   ljgap --csv NAME [FILE]    the answer as CSV (traction, pdf, sweep, simulations), as
+ *   ljgap --csv NAME ...  the answer as CSV (traction, pdf, sweep, simulations), as
  *                         POST /v1/NAME with Accept: text/csv gives it
  *
  * The same contract as POST /v1/NAME (docs/api.md): exit status 0 for a 2xx answer, 1 for a
  * problem (whose body is still printed on stdout), 2 when the command line is wrong or the
- * request cannot be read. A thin shell: all the work is in ljgap_handle_call. The manual page
- * is man/ljgap.1.
+ * request cannot be read. A thin shell: all the work is in ljgap_handle_call and
+ * ljgap_handle_text. The manual page is man/ljgap.1.
  */
 #include "csv.h"
 #include "handler.h"
@@ -31,10 +36,14 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: ljgap [--csv] NAME [FILE]\n"
+            "       ljgap psd --dx M [--dy M] [--periodic] [--NAME VALUE ...] [FILE]\n"
             "       ljgap --help | --version\n"
-            "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact) from "
-            "FILE\n"
-            "or standard input and prints the JSON answer on standard output.\n"
+            "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact,\n"
+            "psd) from FILE or standard input and prints the JSON answer on standard output.\n"
+            "With options, psd reads a height matrix in text instead (one row a line, heights\n"
+            "in m separated by spaces or commas, '#' comments); the options are the query\n"
+            "parameters of POST /v1/psd: dx, dy (m, default dx), periodic, and a material's\n"
+            "E_star (or E1, nu1, E2, nu2), dgamma, epsilon.\n"
             "NAME simulations runs one numerical-model job in the foreground and prints its\n"
             "result; a progress bar goes to standard error when it is a terminal, and Ctrl-C\n"
             "cancels the run.\n"
@@ -118,14 +127,49 @@ static void run_simulation(const char *body, size_t len, ljgap_reply *rep)
     fftw_cleanup(); /* the run's FFTW planner state is global */
 }
 
+/* The options after NAME as query parameters (params has room for argc entries); *file gets
+ * the one argument that is not an option, if any. Returns the number of parameters, or -1
+ * (after a message) when the command line is wrong. */
+static int text_options(int argc, char **argv, ljgap_param *params, const char **file)
+{
+    int n = 0;
+    for (int i = 2; i < argc; i++) {
+        char *a = argv[i], *eq;
+        if (strncmp(a, "--", 2) != 0 || !a[2]) {
+            if (*file) {
+                fprintf(stderr, "ljgap: more than one file: '%s' and '%s'\n", *file, a);
+                return -1;
+            }
+            *file = a;
+            continue;
+        }
+        params[n].name = a + 2;
+        if ((eq = strchr(a + 2, '='))) { /* --name=value */
+            *eq = '\0';
+            params[n].value = eq + 1;
+        } else if (strcmp(a + 2, "periodic") == 0) {
+            params[n].value = "true";
+        } else if (i + 1 < argc) {
+            params[n].value = argv[++i];
+        } else {
+            fprintf(stderr, "ljgap: option --%s needs a value\n", a + 2);
+            return -1;
+        }
+        n++;
+    }
+    return n;
+}
+
 int main(int argc, char **argv)
 {
     FILE *in = stdin;
     char *body = NULL;
+    const char *file = NULL;
+    ljgap_param *params = NULL;
     size_t len = 0;
     ljgap_reply rep = {0};
-    const char *name, *file;
-    int rc = 2, csv = 0;
+    int rc = 2, nparams = -1, csv = 0;
+    ljgap_call call = {0};
     gsl_set_error_handler_off();
     if (argc == 2 && strcmp(argv[1], "--help") == 0) {
         usage(stdout);
@@ -137,16 +181,31 @@ int main(int argc, char **argv)
     }
     if (argc > 1 && strcmp(argv[1], "--csv") == 0) {
         csv = 1;
+        call.accept = "text/csv";
         argv++;
         argc--;
     }
-    if (argc < 2 || argc > 3 || argv[1][0] == '-') {
+    if (argc < 2 || argv[1][0] == '-') {
         usage(stderr);
         return 2;
     }
-    name = argv[1];
-    file = argc == 3 ? argv[2] : "-";
-    if (strcmp(file, "-") != 0 && !(in = fopen(file, "rb"))) {
+    for (int i = 2; i < argc; i++)
+        if (strncmp(argv[i], "--", 2) == 0 && argv[i][2]) nparams = 0; /* a text upload */
+    if (nparams == 0) {
+        if (!ljgap_handler_has_text(argv[1])) {
+            fprintf(stderr, "ljgap: options are for a text upload, which only psd takes\n");
+            usage(stderr);
+            return 2;
+        }
+        if (!(params = calloc((size_t)argc, sizeof *params))) goto end;
+        if ((nparams = text_options(argc, argv, params, &file)) < 0) goto end;
+    } else if (argc > 3) {
+        usage(stderr);
+        return 2;
+    } else {
+        file = argc == 3 ? argv[2] : NULL;
+    }
+    if (file && strcmp(file, "-") != 0 && !(in = fopen(file, "rb"))) {
         fprintf(stderr, "ljgap: %s: %s\n", file, strerror(errno));
         goto end;
     }
@@ -154,12 +213,13 @@ int main(int argc, char **argv)
         fprintf(stderr, "ljgap: cannot read the request: %s\n", strerror(errno));
         goto end;
     }
-    if (strcmp(name, "simulations") == 0) {
+    if (nparams >= 0) {
+        ljgap_handle_text(argv[1], params, (size_t)nparams, body, len, &call, &rep);
+    } else if (strcmp(argv[1], "simulations") == 0) {
         run_simulation(body, len, &rep);
-        if (csv) ljgap_csv_reply(name, &rep);
+        if (csv) ljgap_csv_reply(argv[1], &rep);
     } else {
-        ljgap_call call = {.accept = csv ? "text/csv" : NULL};
-        ljgap_handle_call(name, body, len, &call, &rep);
+        ljgap_handle_call(argv[1], body, len, &call, &rep);
     }
     /* a CSV body ends in its own newline; a JSON one gets one */
     if (fwrite(rep.body, 1, rep.len, stdout) != rep.len ||
@@ -171,6 +231,7 @@ int main(int argc, char **argv)
     rc = rep.status >= 200 && rep.status < 300 ? 0 : 1;
 end:
     ljgap_reply_free(&rep);
+    free(params);
     free(body);
     if (in && in != stdin) fclose(in);
     return rc;

@@ -46,6 +46,7 @@
 #include "accept.h"
 #include "csv.h"
 #include "ljgap_sim.h"
+#include "ljgap_topo.h"
 #include "problems.h"
 #include "request.h"
 
@@ -106,6 +107,8 @@ typedef struct {
     const volatile int *cancel; /* the call's cancel flag (or the limits' one) */
     int oom;                    /* an allocation failed while building ans */
     char fail[DETAIL_LEN];      /* extra detail for a failed status, "" or starting with a space */
+    const char *bad_ptr;        /* pointer of an LJGAP_EINVAL problem (NULL: "/psd") */
+    const char *bad_head;       /* its detail's first words (NULL: the PSD's) */
 } job;
 
 /* ---- replies ---- */
@@ -570,6 +573,189 @@ static int run_contact(job *j)
     return LJGAP_OK;
 }
 
+/* ---- psd: a height map's PSD (issue 15, core/topo.c) ---- */
+
+#define K1_MARGIN 1.1 /* the proposed k1 keeps this factor above k0/χ, off the pole of (14) */
+#define SLOPE_WARN 3  /* an rms slope above this asks whether the units are right */
+
+static size_t topo_cap(void)
+{
+    return (size_t)(limits.max_topo_points > 0 ? limits.max_topo_points
+                                               : LJGAP_TOPO_POINTS_DEFAULT);
+}
+
+/* The psd object for /v1/adhesion with "units":"SI": the bins from k_from on with the fitted
+ * power law as the tail; the fitted power law itself from k_from when fewer than two bins lie
+ * beyond it; null (and a warning) when neither can be formed. Its variance into *m0 (m², NAN
+ * when null). */
+static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, double *m0)
+{
+    double *k = NULL, *P = NULL, q = 2 * r->fit.D.value - 8;
+    size_t n = 0;
+    int tail = r->has_fit && q < -2, st = ljgap_topo_table(r, k_from, &k, &P, &n);
+    cJSON *o;
+    ljgap_psd psd;
+    *m0 = NAN;
+    if (st == LJGAP_ENOMEM) {
+        j->oom = 1;
+        return;
+    }
+    if (st == LJGAP_OK) {
+        o = put(j, j->ans, "psd", cJSON_CreateObject());
+        put(j, o, "kind", cJSON_CreateString("table"));
+        put_nums(j, o, "k", k, n, sizeof *k, "psd.k");
+        put_nums(j, o, "P", P, n, sizeof *P, "psd.P");
+        if (tail)
+            put_num(j, put(j, o, "tail", cJSON_CreateObject()), "exponent", q, "psd.tail", -1);
+        else
+            ljgap_warn(&j->rq.warn,
+                       "the psd object has no tail: %s, so the table ends at k = %g 1/m",
+                       r->has_fit ? "the fitted exponent 2D - 8 is not below -2 (D >= 3)"
+                                  : "there is no power-law fit",
+                       k[n - 1]);
+        if (ljgap_psd_table(&psd, k, P, n, tail, q) == LJGAP_OK) *m0 = psd.m0;
+        ljgap_psd_free(&psd);
+    } else if (r->has_fit && r->fit.D.value > 2 && tail) {
+        o = put(j, j->ans, "psd", cJSON_CreateObject());
+        put(j, o, "kind", cJSON_CreateString("power"));
+        put_num(j, o, "D", r->fit.D.value, "psd.D", -1);
+        put_num(j, o, "k1", k_from, "psd.k1", -1);
+        put_num(j, o, "C", r->fit.C.value, "psd.C", -1);
+        ljgap_warn(&j->rq.warn,
+                   "the theory's band starts at k1 = %g 1/m, beyond the measured bins: the psd "
+                   "object is the fitted power law, extrapolated",
+                   k_from);
+        if (ljgap_psd_power(&psd, r->fit.D.value, k_from, INFINITY, LJGAP_LEVEL_C,
+                            r->fit.C.value) == LJGAP_OK)
+            *m0 = psd.m0;
+    } else {
+        put(j, j->ans, "psd", cJSON_CreateNull());
+        ljgap_warn(&j->rq.warn,
+                   "no psd object: fewer than two bins lie above k = %g 1/m and the "
+                   "fit gives no power law with 2 < D < 3 to extrapolate",
+                   k_from);
+    }
+    free(k);
+    free(P);
+}
+
+/* With a material: where the measured band lies against the theory's k > k0/χ, the k1 it
+ * proposes (the first bin, or K1_MARGIN k0/χ when that is higher) and the psd object from
+ * there. */
+static void put_domain(job *j, const ljgap_topo_result *r)
+{
+    const ljgap_material *m = &j->rq.mat;
+    double chi = ljgap_units_chi(m), kd = ljgap_k0() / chi, kf = r->k[0], kl = r->k[r->n - 1];
+    double k1 = fmax(kf, K1_MARGIN * kd), m0;
+    double inside = kl <= kd ? 0 : kf > kd ? 1 : log(kl / kd) / log(kl / kf);
+    cJSON *d = put(j, j->ans, "domain", cJSON_CreateObject());
+    put_num(j, d, "k0", kd, "domain.k0", -1);
+    put(j, d, "inside", cJSON_CreateString(inside == 1 ? "all" : inside == 0 ? "none" : "part"));
+    put_num(j, d, "fraction", inside, "domain.fraction", -1);
+    put_num(j, d, "k1", k1, "domain.k1", -1);
+    put_num(j, d, "k1_dimensionless", k1 * chi, "domain.k1_dimensionless", -1);
+    put_psd_object(j, r, k1, &m0);
+    if (isfinite(m0)) {
+        put_num(j, d, "h_rms", sqrt(m0), "domain.h_rms", -1);
+        put_num(j, d, "m0_dimensionless", ljgap_units_var_to_dimless(m, m0),
+                "domain.m0_dimensionless", -1);
+    } else {
+        put(j, d, "h_rms", cJSON_CreateNull());
+        put(j, d, "m0_dimensionless", cJSON_CreateNull());
+    }
+    if (inside < 1)
+        ljgap_warn(&j->rq.warn,
+                   "%s of the measured band (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
+                   "outside the theory's domain: the psd object starts at k1 = %g 1/m",
+                   inside == 0 ? "all" : "part", kf, kl, kd, k1);
+}
+
+static int run_psd(job *j)
+{
+    ljgap_topo_spec *t = &j->rq.topo;
+    ljgap_topo_grid g = {t->nx, t->ny, t->dx, t->dy, t->periodic};
+    ljgap_topo_opts o;
+    ljgap_topo_result r;
+    cJSON *err, *grid, *fit, *efit, *pr;
+    double m0;
+    int st;
+    ljgap_topo_opts_default(&o);
+    o.cancel = j->cancel;
+    st = ljgap_topo_compute(t->h, &g, &o, &r, &j->rq.warn);
+    free(t->h); /* a large map: the answer needs the bins only */
+    t->h = NULL;
+    if (st == LJGAP_EINVAL || st == LJGAP_EFAIL) {
+        j->bad_ptr = "/topography/heights";
+        j->bad_head = "the height map cannot be analysed";
+        return LJGAP_EINVAL;
+    }
+    if (st) return st;
+    put_nums(j, j->ans, "k", r.k, r.n, sizeof *r.k, "k");
+    put_nums(j, j->ans, "P", r.P, r.n, sizeof *r.P, "P");
+    put_nums(j, j->ans, "modes", r.modes, r.n, sizeof *r.modes, "modes");
+    put_num(j, j->ans, "h_rms", r.h_rms.value, "h_rms", -1);
+    put_num(j, j->ans, "rms_slope", r.rms_slope.value, "rms_slope", -1);
+    grid = put(j, j->ans, "grid", cJSON_CreateObject());
+    put(j, grid, "nx", cJSON_CreateNumber((double)t->nx));
+    put(j, grid, "ny", cJSON_CreateNumber((double)t->ny));
+    put_num(j, grid, "dx", t->dx, "grid.dx", -1);
+    put_num(j, grid, "dy", t->dy, "grid.dy", -1);
+    put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
+    put(j, grid, "profile", cJSON_CreateBool(r.profile));
+    put(j, grid, "detrend",
+        cJSON_CreateString(t->periodic ? "mean"
+                           : r.profile ? "line"
+                                       : "plane"));
+    put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
+    put_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
+    put_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
+    err = put(j, j->ans, "error", cJSON_CreateObject());
+    put_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
+    put_num(j, err, "h_rms", r.h_rms.err, "error.h_rms", -1);
+    put_num(j, err, "rms_slope", r.rms_slope.err, "error.rms_slope", -1);
+    if (r.has_fit) {
+        fit = put(j, j->ans, "fit", cJSON_CreateObject());
+        efit = put(j, err, "fit", cJSON_CreateObject());
+        put_num(j, fit, "D", r.fit.D.value, "fit.D", -1);
+        put_num(j, fit, "H", 3 - r.fit.D.value, "fit.H", -1);
+        put_num(j, fit, "C", r.fit.C.value, "fit.C", -1);
+        put_num(j, fit, "k_min", r.fit.kmin, "fit.k_min", -1);
+        put_num(j, fit, "k_max", r.fit.kmax, "fit.k_max", -1);
+        put(j, fit, "bins", cJSON_CreateNumber((double)r.fit.bins));
+        put_num(j, fit, "chi2_red", r.fit.chi2_red, "fit.chi2_red", -1);
+        put_num(j, fit, "corr_lnC_D", r.fit.corr, "fit.corr_lnC_D", -1);
+        put_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
+        put_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
+        put_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);
+    } else {
+        put(j, j->ans, "fit", cJSON_CreateNull());
+        put(j, err, "fit", cJSON_CreateNull());
+    }
+    if (r.profile) {
+        pr = put(j, j->ans, "profile", cJSON_CreateObject());
+        put_nums(j, pr, "PP", r.PP, r.n, sizeof *r.PP, "profile.PP");
+        put_num(j, pr, "alpha", r.alpha.value, "profile.alpha", -1);
+        pr = put(j, err, "profile", cJSON_CreateObject());
+        put_nums(j, pr, "PP", r.PP_err, r.n, sizeof *r.PP_err, "error.profile.PP");
+        put_num(j, pr, "alpha", r.alpha.err, "error.profile.alpha", -1);
+        ljgap_warn(&j->rq.warn,
+                   "one profile: its 1-D PSD PP ∝ k^-%.3g was turned into the isotropic PSD P = "
+                   "F(α) PP/k, which assumes an isotropic surface",
+                   r.alpha.value);
+    }
+    if (r.rms_slope.value > SLOPE_WARN)
+        ljgap_warn(&j->rq.warn,
+                   "the rms slope is %.3g: are the heights and dx, dy in metres (the same unit)?",
+                   r.rms_slope.value);
+    if (j->rq.has_material)
+        put_domain(j, &r);
+    else
+        put_psd_object(j, &r, 0, &m0);
+    put_si(j, j->ans, NULL);
+    ljgap_topo_result_free(&r);
+    return LJGAP_OK;
+}
+
 /* ---- routing ---- */
 
 typedef struct {
@@ -584,6 +770,7 @@ static const route routes[] = {
     {"pdf", LJGAP_EP_PDF, run_pdf},
     {"sweep", LJGAP_EP_SWEEP, run_sweep},
     {"contact", LJGAP_EP_CONTACT, run_contact},
+    {"psd", LJGAP_EP_PSD, run_psd},
 };
 
 static const route *route_find(const char *name)
@@ -613,10 +800,13 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
     cJSON *errors = NULL, *e = NULL;
     switch (st) {
     case LJGAP_EINVAL:
-        join_warnings(detail, sizeof detail, "the PSD is outside the model's domain", &j->rq.warn);
+        join_warnings(detail, sizeof detail,
+                      j->bad_head ? j->bad_head : "the PSD is outside the model's domain",
+                      &j->rq.warn);
         errors = cJSON_CreateArray();
         e = cJSON_CreateObject();
-        if (!errors || !e || !cJSON_AddStringToObject(e, "pointer", "/psd") ||
+        if (!errors || !e ||
+            !cJSON_AddStringToObject(e, "pointer", j->bad_ptr ? j->bad_ptr : "/psd") ||
             !cJSON_AddStringToObject(e, "detail", detail) || !cJSON_AddItemToArray(errors, e)) {
             cJSON_Delete(e);
             cJSON_Delete(errors);
@@ -673,6 +863,27 @@ static cJSON *parse_body(const char *body, size_t len, size_t *where)
     return root;
 }
 
+/* The 422 validation problem of ve's problems (500 when recording them ran out of memory);
+ * takes ve->errors. */
+static void reply_invalid(ljgap_reply *out, ljgap_verr *ve)
+{
+    char detail[DETAIL_LEN];
+    if (ve->oom) {
+        reply_oom(out);
+        return;
+    }
+    if (ve->n > LJGAP_MAX_ERRORS)
+        snprintf(detail, sizeof detail,
+                 "%d problems in the request; the first %d are "
+                 "listed in errors",
+                 ve->n, LJGAP_MAX_ERRORS);
+    else
+        snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve->n,
+                 ve->n == 1 ? "" : "s");
+    reply_problem(out, P_VALIDATION, detail, ve->errors);
+    ve->errors = NULL; /* reply_problem took it */
+}
+
 /* Parses body and validates it as a request to ep into j->rq. Returns 1 when it is valid;
  * else 0 with the problem (400, 422 or 500) in *out. j->rq is left for ljgap_request_free. */
 static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out)
@@ -695,20 +906,7 @@ static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljg
         goto end;
     }
     if (ljgap_request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
-        if (ve.oom) {
-            reply_oom(out);
-            goto end;
-        }
-        if (ve.n > LJGAP_MAX_ERRORS)
-            snprintf(detail, sizeof detail,
-                     "%d problems in the request; the first %d are "
-                     "listed in errors",
-                     ve.n, LJGAP_MAX_ERRORS);
-        else
-            snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve.n,
-                     ve.n == 1 ? "" : "s");
-        reply_problem(out, P_VALIDATION, detail, ve.errors);
-        ve.errors = NULL; /* reply_problem took it */
+        reply_invalid(out, &ve);
         goto end;
     }
     ok = 1;
@@ -736,6 +934,42 @@ static int negotiate(const char *accept, int csv, ljgap_reply *out)
     return k;
 }
 
+/* The form of endpoint's answer that call's Accept header asks for (negotiate). */
+static int form_of(const char *endpoint, const ljgap_call *call, ljgap_reply *out)
+{
+    return negotiate(call ? call->accept : NULL, ljgap_csv_offers(endpoint), out);
+}
+
+/* Runs a validated request and answers it in form (0 JSON, 1 the CSV of endpoint; j->rq is
+ * the caller's to free). */
+static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+                    const ljgap_call *call, double t0, ljgap_reply *out)
+{
+    int st;
+    j->deadline = t0 + limits.max_seconds;
+    j->cancel = call && call->cancel ? call->cancel : limits.cancel;
+    if (!(j->ans = cJSON_CreateObject())) {
+        reply_oom(out);
+        return;
+    }
+    st = run(j);
+    if (!st) put_meta(j, t0);
+    if (!st && j->oom) st = LJGAP_ENOMEM;
+    if (st)
+        reply_status(out, st, j);
+    else if (form == 0)
+        reply_json(out, 200, CT_JSON, j->ans);
+    else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
+        reply_oom(out);
+    cJSON_Delete(j->ans);
+    j->ans = NULL;
+}
+
+void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+{
+    ljgap_handle_call(endpoint, body, len, NULL, out);
+}
+
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out)
 {
@@ -743,45 +977,67 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
     const route *r = route_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
-    int st, form;
+    int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
     if (!r) {
         /* the name may be any bytes: quote only its first whole UTF-8 characters */
         snprintf(detail, sizeof detail,
                  "no endpoint \"%.*s\": the endpoints are adhesion, "
-                 "traction, pdf, sweep and contact",
+                 "traction, pdf, sweep, contact and psd",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
         reply_problem(out, P_NOT_FOUND, detail, NULL);
         goto end;
     }
-    if ((form = negotiate(call ? call->accept : NULL, ljgap_csv_offers(r->name), out)) < 0)
-        goto end;
-    if (!validate(r->ep, body, len, &j, out)) goto end;
-    j.deadline = t0 + limits.max_seconds;
-    j.cancel = call && call->cancel ? call->cancel : limits.cancel;
-    if (!(j.ans = cJSON_CreateObject())) {
-        reply_oom(out);
-        goto end;
-    }
-    st = r->run(&j);
-    if (!st) put_meta(&j, t0);
-    if (!st && j.oom) st = LJGAP_ENOMEM;
-    if (st)
-        reply_status(out, st, &j);
-    else if (form == 0)
-        reply_json(out, 200, CT_JSON, j.ans);
-    else if (ljgap_csv_render(r->name, j.ans, j.rq.si_psd, out) != 0)
-        reply_oom(out);
+    if ((form = form_of(r->name, call, out)) < 0) goto end;
+    if (validate(r->ep, body, len, &j, out)) run_job(&j, r->run, r->name, form, call, t0, out);
 end:
-    cJSON_Delete(j.ans);
     ljgap_request_free(&j.rq);
 }
 
-void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+int ljgap_handler_has_text(const char *endpoint)
 {
-    ljgap_handle_call(endpoint, body, len, NULL, out);
+    return endpoint && strcmp(endpoint, "psd") == 0;
+}
+
+void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
+                       const char *body, size_t len, const ljgap_call *call, ljgap_reply *out)
+{
+    double t0 = ljgap_now();
+    ljgap_topo_spec heights = {0};
+    ljgap_verr ve = {0};
+    cJSON *query = NULL;
+    char detail[DETAIL_LEN];
+    job j;
+    int form;
+    memset(&j, 0, sizeof j);
+    memset(out, 0, sizeof *out);
+    if (!ljgap_handler_has_text(endpoint)) {
+        snprintf(detail, sizeof detail,
+                 "no text upload to \"%.*s\": only psd takes a height matrix as text/plain or "
+                 "text/csv; the other endpoints take JSON",
+                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
+                 endpoint ? endpoint : "");
+        reply_problem(out, P_NOT_FOUND, detail, NULL);
+        return;
+    }
+    if ((form = form_of(endpoint, call, out)) < 0) return;
+    if (!(ve.errors = cJSON_CreateArray())) {
+        reply_oom(out);
+        return;
+    }
+    ljgap_topo_text_parse(body ? body : "", body ? len : 0, topo_cap(), &heights, &ve);
+    if (!(query = ljgap_topo_params_json(params, nparams, &ve))) ve.oom = 1;
+    if (!ve.oom) ljgap_request_parse_text(query, &heights, &limits, &j.rq, &ve);
+    if (ve.n || ve.oom)
+        reply_invalid(out, &ve);
+    else
+        run_job(&j, run_psd, endpoint, form, call, t0, out);
+    cJSON_Delete(query);
+    cJSON_Delete(ve.errors);
+    free(heights.h);
+    ljgap_request_free(&j.rq);
 }
 
 /* ---- simulations (ljgap_sim.h) ---- */

@@ -20,11 +20,13 @@ typedef struct {
 
 /* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
 typedef struct {
-    double max_seconds; /* wall-time cap of one computation (default 20) */
-    long max_samples;   /* montecarlo samples cap (default 1e6) */
-    long max_points;    /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
-    long sweep_threads; /* worker threads of one sweep (default, and when <= 0: the online
-                         * cores; 1 computes sequentially); results do not depend on it */
+    double max_seconds;   /* wall-time cap of one computation (default 20) */
+    long max_samples;     /* montecarlo samples cap (default 1e6) */
+    long max_points;      /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
+    long sweep_threads;   /* worker threads of one sweep (default, and when <= 0: the online
+                           * cores; 1 computes sequentially); results do not depend on it */
+    long max_topo_points; /* cap on the heights of one psd map (default, and when <= 0:
+                           * LJGAP_TOPO_POINTS_DEFAULT) */
     const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
 } ljgap_limits;
 
@@ -32,7 +34,9 @@ void ljgap_limits_default(ljgap_limits *l);
 /* The limits used by ljgap_handle (defaults until set). Not thread-safe: call at start-up. */
 void ljgap_handler_set_limits(const ljgap_limits *l);
 
-/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact".
+#define LJGAP_TOPO_POINTS_DEFAULT (1L << 23) /* 8 Mi heights: a 2896² map, 64 MiB of doubles */
+
+/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
@@ -59,6 +63,28 @@ void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail)
 
 /* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
 int ljgap_handler_has(const char *endpoint);
+
+/* ---- text uploads: psd's height matrix as text/plain or text/csv ----
+ * The body is the matrix (one row a line, numbers in metres separated by white space or
+ * commas, '#' comments), the query parameters carry the rest of the request: dx, dy, periodic
+ * and, optionally, the material's fields (E_star or E1, nu1, E2, nu2; dgamma; epsilon). The
+ * answer is the one ljgap_handle("psd") gives for the same map as JSON. Problems are 422 with
+ * the pointer the same field has in the JSON request (/topography/heights/ROW/COL, whose
+ * detail names the line and column; /topography/dx; /material/E_star; an unknown parameter at
+ * /NAME); an endpoint without a text form is 404. Bodies up to LJGAP_TEXT_MAX_BYTES are meant
+ * (the daemon enforces it); the map itself is capped by limits.max_topo_points. call may be
+ * NULL, as for ljgap_handle_call. */
+#define LJGAP_TEXT_MAX_BYTES ((size_t)64 << 20)
+
+typedef struct {
+    const char *name;  /* query parameter name, decoded */
+    const char *value; /* its value, decoded; NULL or "" when given without one */
+} ljgap_param;
+
+void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
+                       const char *body, size_t len, const ljgap_call *call, ljgap_reply *out);
+/* Does this endpoint take a text upload ("psd")? */
+int ljgap_handler_has_text(const char *endpoint);
 
 /* ---- simulations: the numerical model (ljgap_sim.h) as a job ----
  * Not an endpoint of ljgap_handle: a run takes minutes, so the daemon queues it (jobs.h) and

@@ -22,6 +22,13 @@
  * is a statement about χk1. Only a power law's C waits: its conversion depends on D, which a
  * sweep may vary, so ljgap_psd_from_spec converts it. Everything else (g_ave, grids, pdf
  * cut-offs) stays dimensionless.
+ *
+ * psd takes a height map instead (issue 15): topography {heights: rows of heights in m, dx, dy
+ * (default dx) in m, periodic} and an optional material. The matrix must be rectangular, at
+ * least LJGAP_TOPO_MIN_SIDE a side (or a single row or column: a profile), its heights finite,
+ * within ±TOPO_H_MAX m and not all equal, in all at most limits.max_topo_points. A text upload
+ * (topo_text.c) arrives here as its query, {"topography": {dx, dy, periodic}, "material"}, with
+ * the matrix parsed beside it, and is checked by the same code.
  */
 #include "request.h"
 
@@ -45,6 +52,11 @@
 #define R_MIN 1e-12 /* sphere radius R (m) */
 #define R_MAX 1e6
 #define PTR_LEN 96 /* room for every pointer built from known names */
+/* A height map (psd): spacings and heights in m. Far beyond any instrument, but bounded, so that
+ * every periodogram and moment is a finite double. */
+#define TOPO_D_MIN 1e-12 /* dx, dy */
+#define TOPO_D_MAX 1.0
+#define TOPO_H_MAX 1e3 /* |height| */
 
 static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax",  "fixed_vmax",
                                             "samples", "seed",   "material", "units", NULL};
@@ -61,6 +73,10 @@ static const char *const range_fields[] = {"min", "max", "n", NULL};
 /* A simulation takes the dimensionless psd and its own fields only (no method, material). */
 static const char *const sim_fields[] = {"psd",  "n",     "L",   "realizations",
                                          "seed", "g_ave", "tol", NULL};
+/* psd: a height map and, optionally, a material (the theory's domain in the answer). */
+static const char *const psd_fields[] = {"topography", "material", NULL};
+static const char *const topo_fields[] = {"heights", "dx", "dy", "periodic", NULL};
+static const char *const topo_text_fields[] = {"dx", "dy", "periodic", NULL}; /* the query */
 
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
 {
@@ -888,6 +904,190 @@ static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limit
     parse_traction(e, root, &gaps, rq);
 }
 
+/* ---- psd: the height map ---- */
+
+static size_t topo_cap(const ljgap_limits *lim)
+{
+    return (size_t)(lim->max_topo_points > 0 ? lim->max_topo_points : LJGAP_TOPO_POINTS_DEFAULT);
+}
+
+/* The JSON matrix topography.heights into t (t->h stays NULL unless every value is good). */
+static void parse_heights(ljgap_verr *e, const cJSON *topo, const ljgap_limits *lim,
+                          ljgap_topo_spec *t)
+{
+    const cJSON *H = required(e, topo, "/topography", "heights",
+                              "rows of heights in m: [[h00, h01, ...], [h10, ...], ...]");
+    const cJSON *row, *it;
+    char ptr[PTR_LEN];
+    size_t nx, ny, j = 0, bad = 0;
+    if (!H) return;
+    if (!cJSON_IsArray(H) || !H->child) {
+        ljgap_verr_add(e, "/topography/heights",
+                       "must be a non-empty array of rows, each an array of heights in m");
+        return;
+    }
+    if (!cJSON_IsArray(H->child)) {
+        ljgap_verr_add(e, "/topography/heights/0",
+                       "must be an array of heights in m (one row of the map; a single profile "
+                       "is [[h0, h1, ...]])");
+        return;
+    }
+    ny = (size_t)cJSON_GetArraySize(H);
+    nx = (size_t)cJSON_GetArraySize(H->child);
+    if (nx == 0 || nx > topo_cap(lim) / ny) {
+        ljgap_verr_add(e, "/topography/heights",
+                       "%zu rows of %zu heights: give 1 to %zu heights in all", ny, nx,
+                       topo_cap(lim));
+        return;
+    }
+    if (!(t->h = malloc(nx * ny * sizeof *t->h))) {
+        e->oom = 1;
+        return;
+    }
+    cJSON_ArrayForEach(row, H)
+    {
+        size_t i = 0;
+        snprintf(ptr, sizeof ptr, "/topography/heights/%zu", j);
+        if (!cJSON_IsArray(row) || (size_t)cJSON_GetArraySize(row) != nx) {
+            if (cJSON_IsArray(row))
+                ljgap_verr_add(e, ptr,
+                               "row %zu has %d heights, row 0 has %zu: every row needs as "
+                               "many (a ragged matrix)",
+                               j, cJSON_GetArraySize(row), nx);
+            else
+                ljgap_verr_add(e, ptr, "row %zu must be an array of heights in m", j);
+            bad++;
+            j++;
+            continue;
+        }
+        cJSON_ArrayForEach(it, row)
+        {
+            double x = NAN;
+            snprintf(ptr, sizeof ptr, "/topography/heights/%zu/%zu", j, i);
+            if (num(e, it, ptr, &x) && !(fabs(x) <= TOPO_H_MAX)) {
+                ljgap_verr_add(e, ptr, "height %g m is outside [-%g, %g] m (heights are in metres)",
+                               x, TOPO_H_MAX, TOPO_H_MAX);
+                x = NAN;
+            }
+            bad += isnan(x);
+            t->h[j * nx + i++] = x;
+        }
+        j++;
+    }
+    if (bad) {
+        free(t->h);
+        t->h = NULL;
+        return;
+    }
+    t->nx = nx;
+    t->ny = ny;
+}
+
+/* The map's shape (LJGAP_TOPO_MIN_SIDE a side, or one row or column: a profile) and its
+ * heights not all equal; t->h is the parsed matrix (NULL: already reported). */
+static void check_map(ljgap_verr *e, const ljgap_topo_spec *t)
+{
+    size_t N = t->nx * t->ny, same = 1;
+    int profile = t->nx == 1 || t->ny == 1;
+    if (!t->h) return;
+    if (profile && N < LJGAP_TOPO_MIN_SIDE) {
+        ljgap_verr_add(e, "/topography/heights", "a profile of %zu heights: at least %d are needed",
+                       N, LJGAP_TOPO_MIN_SIDE);
+        return;
+    }
+    if (!profile && t->ny < LJGAP_TOPO_MIN_SIDE)
+        ljgap_verr_add(e, "/topography/heights",
+                       "%zu rows: a map needs at least %d rows of at least %d heights (or one "
+                       "row: a profile)",
+                       t->ny, LJGAP_TOPO_MIN_SIDE, LJGAP_TOPO_MIN_SIDE);
+    if (!profile && t->nx < LJGAP_TOPO_MIN_SIDE)
+        ljgap_verr_add(e, "/topography/heights/0",
+                       "rows of %zu heights: a map needs at least %d a row (or one column: a "
+                       "profile)",
+                       t->nx, LJGAP_TOPO_MIN_SIDE);
+    for (size_t i = 1; i < N; i++)
+        same += t->h[i] == t->h[0];
+    if (same == N)
+        ljgap_verr_add(e, "/topography/heights",
+                       "all %zu heights are equal (%g m): a flat map has no spectrum", N, t->h[0]);
+}
+
+/* A spacing at topo[name] (default: *dflt when absent and dflt is not NULL). */
+static void parse_spacing(ljgap_verr *e, const cJSON *topo, const char *name, const double *dflt,
+                          double *x)
+{
+    char ptr[PTR_LEN];
+    const cJSON *it = dflt ? member(topo, name)
+                           : required(e, topo, "/topography", name,
+                                      "the spacing of the heights along a row, m (for a text "
+                                      "upload the query parameter dx)");
+    snprintf(ptr, sizeof ptr, "/topography/%s", name);
+    *x = NAN;
+    if (!it) {
+        if (dflt) *x = *dflt;
+        return;
+    }
+    if (num_pos(e, it, ptr, x) && !in_core_range(e, ptr, name, *x, TOPO_D_MIN, TOPO_D_MAX))
+        *x = NAN;
+}
+
+/* The topography object: heights (unless text: they came as the body), dx, dy, periodic. */
+static void parse_topography(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
+                             ljgap_topo_spec *t)
+{
+    const cJSON *topo = required(e, root, "", "topography",
+                                 "{\"heights\": [[...], ...], \"dx\": m, \"dy\": m, "
+                                 "\"periodic\": false}"),
+                *per;
+    if (!topo) return;
+    if (!cJSON_IsObject(topo)) {
+        ljgap_verr_add(e, "/topography",
+                       "must be an object {\"heights\": [[...], ...], \"dx\": m, ...}");
+        return;
+    }
+    only_fields(e, topo, "/topography", text ? topo_text_fields : topo_fields, NULL);
+    parse_spacing(e, topo, "dx", NULL, &t->dx);
+    parse_spacing(e, topo, "dy", &t->dx, &t->dy);
+    if ((per = member(topo, "periodic"))) {
+        if (cJSON_IsBool(per))
+            t->periodic = cJSON_IsTrue(per);
+        else
+            ljgap_verr_add(e, "/topography/periodic",
+                           "must be true (the map is one period of the surface: no plane, no "
+                           "window) or false");
+    }
+    if (!text) parse_heights(e, topo, lim, t);
+    check_map(e, t);
+}
+
+static void parse_psd_request(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
+                              ljgap_request *rq)
+{
+    rq->method = "periodogram";
+    only_fields(e, root, "", psd_fields, NULL);
+    parse_material(e, root, 0, rq);
+    parse_topography(e, root, lim, text, &rq->topo);
+}
+
+int ljgap_request_parse_text(const cJSON *root, ljgap_topo_spec *heights, const ljgap_limits *lim,
+                             ljgap_request *rq, ljgap_verr *e)
+{
+    memset(rq, 0, sizeof *rq);
+    rq->ep = LJGAP_EP_PSD;
+    ljgap_opts_default(&rq->opts);
+    rq->psd.kind = (ljgap_psd_kind)-1;
+    rq->topo.h = heights->h;
+    rq->topo.nx = heights->nx;
+    rq->topo.ny = heights->ny;
+    heights->h = NULL;
+    if (!cJSON_IsObject(root)) {
+        ljgap_verr_add(e, "", "the query must be an object");
+        return e->n;
+    }
+    parse_psd_request(e, root, lim, 1, rq);
+    return e->n;
+}
+
 int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq, ljgap_verr *e)
 {
@@ -912,6 +1112,10 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
         parse_simulation(e, root, lim, rq);
         return e->n;
     }
+    if (ep == LJGAP_EP_PSD) {
+        parse_psd_request(e, root, lim, 0, rq);
+        return e->n;
+    }
     only_fields(e, root, "", common_fields, extra[ep]);
     parse_common(e, root, lim, rq);
     parse_material(e, root, ep == LJGAP_EP_CONTACT, rq);
@@ -924,6 +1128,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     switch (ep) {
     case LJGAP_EP_ADHESION:
     case LJGAP_EP_SIMULATION: /* parsed above */
+    case LJGAP_EP_PSD:
         break;
     case LJGAP_EP_TRACTION:
         parse_traction(e, root, lim, rq);
@@ -949,7 +1154,8 @@ void ljgap_request_free(ljgap_request *rq)
     free(rq->psd.k);
     free(rq->psd.P);
     free(rq->x);
-    rq->psd.k = rq->psd.P = rq->x = NULL;
+    free(rq->topo.h);
+    rq->psd.k = rq->psd.P = rq->x = rq->topo.h = NULL;
 }
 
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)

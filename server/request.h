@@ -13,6 +13,7 @@
 #include "handler.h"
 #include "ljgap.h"
 #include "ljgap_sim.h"
+#include "ljgap_topo.h"
 #include "ljgap_units.h"
 
 #include <cjson/cJSON.h>
@@ -24,7 +25,8 @@ typedef enum {
     LJGAP_EP_PDF,
     LJGAP_EP_SWEEP,
     LJGAP_EP_CONTACT,
-    LJGAP_EP_SIMULATION /* a numerical-model job (ljgap_sim.h), not a synchronous endpoint */
+    LJGAP_EP_SIMULATION, /* a numerical-model job (ljgap_sim.h), not a synchronous endpoint */
+    LJGAP_EP_PSD         /* the PSD of a height map (ljgap_topo.h); its text form too */
 } ljgap_endpoint;
 
 /* Which PSD field a sweep varies. */
@@ -47,6 +49,16 @@ typedef struct {
     ljgap_material mat; /* the material, when c_si */
 } ljgap_psd_spec;
 
+/* A height map as given (psd: the JSON topography object, or a text upload and its query). */
+typedef struct {
+    double *h;    /* owned: heights in m, row-major [ny][nx] (a row of the matrix runs along x) */
+    size_t nx;    /* values in a row */
+    size_t ny;    /* rows */
+    double dx;    /* spacing along a row, m */
+    double dy;    /* spacing between rows, m (dx when not given) */
+    int periodic; /* the map is one period of a periodic surface */
+} ljgap_topo_spec;
+
 typedef struct {
     ljgap_endpoint ep;
     ljgap_opts opts;       /* method, tol, vmax, samples, seed (limits set by the handler) */
@@ -67,6 +79,7 @@ typedef struct {
     double R;              /* contact: sphere radius (m) */
     ljgap_sim_opts sim;    /* simulation: n, L, realizations, seed, tol (the core's defaults
                             * for what is not given); g_ave points in x */
+    ljgap_topo_spec topo;  /* psd: the height map */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
 } ljgap_request;
 
@@ -85,6 +98,26 @@ typedef struct {
 int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq, ljgap_verr *e);
 void ljgap_request_free(ljgap_request *rq);
+/* The same for a text upload to psd: root holds the query as {"topography": {dx, dy,
+ * periodic}, "material": {...}} (ljgap_topo_params_json) and heights the parsed matrix, which
+ * rq takes over (heights is left empty). Problems already in e (the text's) stay first. */
+int ljgap_request_parse_text(const cJSON *root, ljgap_topo_spec *heights, const ljgap_limits *lim,
+                             ljgap_request *rq, ljgap_verr *e);
+
+/* ---- topo_text.c: the plain-text form of POST /v1/psd ---- */
+/* Parses a matrix of heights (m): one row a line, values separated by white space or one comma,
+ * '#' to the end of a line a comment, blank lines skipped, CR LF accepted. Every bad value is a
+ * problem at /topography/heights/ROW/COL whose detail names the line and column (1-based), a
+ * row of the wrong length one at /topography/heights/ROW. Stops after max_points values or
+ * LJGAP_MAX_ERRORS problems. t->h, t->nx, t->ny receive the matrix (t->h may be NULL). */
+void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljgap_topo_spec *t,
+                           ljgap_verr *e);
+/* The query parameters as a request root {"topography": {...}, "material": {...}}: dx, dy
+ * (numbers), periodic (true/false/1/0, or no value: true) and the material's fields (numbers);
+ * a value that is none of these goes in as a string (request.c refuses it at the field's
+ * pointer). An unknown or repeated parameter is a problem at its pointer (/topography/dx,
+ * /material/E_star; /NAME for an unknown one). NULL when out of memory. */
+cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e);
 
 /* Builds the PSD a spec describes (ljgap_psd_power / ljgap_psd_table status). */
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);

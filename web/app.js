@@ -263,12 +263,14 @@
       });
     });
 
-  /* POST the exact text to /v1/endpoint; retries 503 after Retry-After. -> {status, json} */
-  async function post(endpoint, text, signal = new AbortController().signal) {
+  /* POST the exact text to /v1/endpoint (JSON, or opts.contentType with opts.query); retries 503
+   * after Retry-After. -> {status, json} */
+  async function post(endpoint, text, signal = new AbortController().signal, opts = {}) {
+    const url = `/v1/${endpoint}${opts.query ? `?${opts.query}` : ""}`;
     for (let attempt = 0; ; attempt++) {
-      const r = await fetch(`/v1/${endpoint}`, {
+      const r = await fetch(url, {
         method: "POST",
-        headers: { "Content-Type": "application/json" },
+        headers: { "Content-Type": opts.contentType || "application/json" },
         body: text,
         signal,
       });
@@ -291,7 +293,7 @@
   /* ---- panels ---- */
 
   const panels = {}; /* name -> {title, requests:[{endpoint,text,label}], answers:[], series:[], xName} */
-  const panelNames = ["traction", "pdf", "sweep", "psd", "contact", "jobs"];
+  const panelNames = ["traction", "pdf", "sweep", "psd", "contact", "jobs", "topo"];
   const plotTitles = {
     traction: "Mean traction against mean gap",
     pdf: "Gap probability density",
@@ -299,10 +301,12 @@
     psd: "Power spectral density",
     contact: "Sphere contact",
     jobs: "Numerical model against the statistical theory",
+    topo: "Measured topography: isotropic PSD and its power-law fit",
   };
 
   function resetPanel(name) {
     panels[name] = { title: plotTitles[name], requests: [], answers: [], series: [], xName: "x" };
+    return panels[name];
   }
 
   function metaLine(ans) {
@@ -726,7 +730,7 @@
           if (blob) download(`ljgap-${name}.png`, blob);
         });
       }
-      if (name !== "psd") b("Copy as curl", () => copyCurl(name));
+      if (name !== "psd" && name !== "topo") b("Copy as curl", () => copyCurl(name));
     }
   }
 
@@ -817,7 +821,7 @@
     p.series = series;
     p.xName = figOpts.xName || "x";
     p.answers = answers;
-    LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, ...figOpts });
+    return LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, ...figOpts });
   }
 
   async function probeJobs() {
@@ -876,6 +880,12 @@
       /* the picture waits for a usable form */
     }
     probeJobs();
+    if (typeof LJTopo !== "undefined") {
+      LJTopo.init({
+        panels, post, el, val, fmt, errFmt, clearErrors, placeProblem, showFieldError, showSeries,
+        resetPanel, materialObject, summaryTable, metaLine, warnings, setBusy, setIdle,
+      });
+    }
   }
 
   window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem };

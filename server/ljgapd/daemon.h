@@ -103,7 +103,11 @@ typedef struct {
     char *body;                   /* request body received so far (body routes) */
     size_t len;                   /* bytes in body */
     size_t cap;                   /* bytes allocated for body */
-    int too_large;                /* the body outgrew cfg.max_body: answer 413 */
+    size_t limit;                 /* the body's limit: cfg.max_body, or the route's text_max */
+    int text;                     /* the body is text/plain or text/csv (a text route) */
+    ljgap_param *params;          /* a text body's query parameters (owned, decoded), or NULL */
+    size_t nparams;               /* entries in params */
+    int too_large;                /* the body outgrew its limit: answer 413 */
     size_t discarded;             /* body bytes dropped since (or after an early answer) */
     work_task *task;              /* its work while it waits, runs, or has just ended */
 } request;
@@ -128,6 +132,8 @@ struct route {
     const char *allow;               /* allowed methods, the Allow header of a 405 */
     int takes_body;                  /* read a JSON body before answering */
     route_fn answer;                 /* writes the response (called again after a resume) */
+    size_t text_max;                 /* also takes a text/plain or text/csv body of at most this
+                                      * many bytes, with its query (0: JSON only) */
 };
 
 /* The row for url: first match wins; the last row (path NULL) answers 404. */
@@ -136,6 +142,8 @@ const struct route *route_find(const char *url);
 int method_allowed(const char *allow, const char *method);
 /* Is the Content-Type application/json or application/...+json (parameters allowed)? */
 int is_json_type(const char *ct);
+/* Is it text/plain or text/csv (parameters allowed)? */
+int is_text_type(const char *ct);
 
 /* ---- work off the I/O thread (work.c) ---- */
 
@@ -163,6 +171,9 @@ void work_release(request *r);
 /* POST /v1/NAME: the cache, else a compute slot. */
 enum MHD_Result route_compute(struct MHD_Connection *c, request *r);
 int compute_exists(const char *rest);
+/* POST /v1/psd: JSON as route_compute; a text body (a height matrix) with its query on a
+ * compute slot, not cached. */
+enum MHD_Result route_psd(struct MHD_Connection *c, request *r);
 
 /* static.c: GET / and the page's files: compiled in, or from --web DIR. */
 enum MHD_Result route_static(struct MHD_Connection *c, request *r);

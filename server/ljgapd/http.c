@@ -14,7 +14,9 @@
  *     and the next is answered 503.
  *   - bodies: body routes must say Content-Type: application/json (else 415) and carry at most
  *     --max-body bytes (413, decided from Content-Length before reading, or while reading a
- *     chunked body, when the buffer would grow past the limit).
+ *     chunked body, when the buffer would grow past the limit). A route with text_max also
+ *     takes text/plain or text/csv up to that many bytes; its query parameters are copied then
+ *     (decoded by libmicrohttpd) for the work on a compute slot.
  *   - the log: one line per request on stderr when libmicrohttpd reports it complete: method,
  *     path, status, milliseconds, request id, and notes (time waited for a slot, a client that
  *     went away). X-Request-Id is echoed when the client sends a sane one,
@@ -73,6 +75,7 @@ static request *request_new(struct MHD_Connection *c, const char *url, const cha
 
     if (!r) return NULL;
     clock_gettime(CLOCK_MONOTONIC, &r->t0);
+    r->limit = srv.cfg.max_body; /* a text route raises it in request_begin */
     r->conn = c;
     r->rec = ci ? ci->socket_context : NULL;
     r->url = url;
@@ -87,6 +90,46 @@ static request *request_new(struct MHD_Connection *c, const char *url, const cha
         snprintf(r->id, sizeof r->id, "%08x%08lx", srv.id_seed,
                  (unsigned long)atomic_fetch_add(&srv.id_counter, 1) + 1);
     return r;
+}
+
+/* The decoded query parameters of a text body into r->params (one block: the array, then the
+ * strings); -1 when out of memory. */
+struct query_copy {
+    request *r;
+    size_t n, bytes; /* first pass: count and sizes; second: fill */
+    char *next;      /* second pass: where the next string goes */
+};
+
+static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char *key,
+                                 const char *value)
+{
+    struct query_copy *q = cls;
+    const char *kv[2] = {key ? key : "", value};
+    if (!q->next) {
+        q->n++;
+        q->bytes += strlen(kv[0]) + 1 + (value ? strlen(value) + 1 : 0);
+        return MHD_YES;
+    }
+    ljgap_param *p = &q->r->params[q->r->nparams++];
+    for (int i = 0; i < 2; i++) {
+        if (!kv[i]) continue;
+        size_t n = strlen(kv[i]) + 1;
+        memcpy(q->next, kv[i], n);
+        *(i ? &p->value : &p->name) = q->next;
+        q->next += n;
+    }
+    return MHD_YES;
+}
+
+static int query_copy(struct MHD_Connection *c, request *r)
+{
+    struct query_copy q = {r, 0, 0, NULL};
+    MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, query_arg, &q);
+    if (!q.n) return 0;
+    if (!(r->params = calloc(1, q.n * sizeof *r->params + q.bytes))) return -1;
+    q.next = (char *)(r->params + q.n);
+    MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, query_arg, &q);
+    return 0;
 }
 
 /* The first call of a request: route it and refuse what can be refused before any body. */
@@ -115,13 +158,20 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     }
     if (!r->route->takes_body) return r->route->answer(c, r);
 
+    ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    r->text = r->route->text_max && is_text_type(ctype);
+    r->limit = r->text ? r->route->text_max : srv.cfg.max_body;
     clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (clen) want = strtoull(clen, NULL, 10);
-    if (want > srv.cfg.max_body) return respond_too_large(c, r);
-    ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-    if (!is_json_type(ctype))
+    if (want > r->limit) return respond_too_large(c, r);
+    if (!r->text && !is_json_type(ctype))
         return respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE,
-                               "send the request as Content-Type: application/json", NULL, NULL);
+                               r->route->text_max
+                                   ? "send the request as Content-Type: application/json, or "
+                                     "the height matrix as text/plain or text/csv"
+                                   : "send the request as Content-Type: application/json",
+                               NULL, NULL);
+    if (r->text && query_copy(c, r)) return MHD_NO;
     conns_receiving(srv.conns, r->rec);
     if (want) {
         r->body = malloc(want + 1);
@@ -137,7 +187,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
  * goes on sending past DISCARD_FACTOR times the limit. */
 static int request_take(request *r, const char *data, size_t n)
 {
-    size_t limit = srv.cfg.max_body;
+    size_t limit = r->limit;
     if (!r->too_large && !r->status && r->len + n > limit) {
         r->too_large = 1;
         free(r->body);
@@ -203,6 +253,7 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     conns_idle(srv.conns, r->rec);
     if (r->counted) conns_client_leave(srv.conns, r->client);
     work_release(r);
+    free(r->params);
     free(r->body);
     free(r);
     *con_cls = NULL;

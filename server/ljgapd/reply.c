@@ -142,6 +142,7 @@ enum MHD_Result respond_static(struct MHD_Connection *c, request *r, const void 
 enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r)
 {
     char detail[64];
-    snprintf(detail, sizeof detail, "the request body is limited to %zu bytes", srv.cfg.max_body);
+    snprintf(detail, sizeof detail, "the request body is limited to %zu bytes",
+             r->limit ? r->limit : srv.cfg.max_body);
     return respond_problem(c, r, MHD_HTTP_CONTENT_TOO_LARGE, detail, NULL, NULL);
 }

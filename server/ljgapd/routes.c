@@ -7,6 +7,10 @@
  * never wait for anything. The simulation job routes call the job store, which may wait (a
  * lock, a disk, a DELETE waiting for a job to stop), so they run on srv.ops (work.c).
  *
+ * A row may take a text body besides JSON (text_max > 0): POST /v1/psd takes a height matrix as
+ * text/plain or text/csv of up to LJGAP_TEXT_MAX_BYTES with its query (ljgap_handle_text);
+ * every other body route keeps JSON and --max-body.
+ *
  * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and queues
  * a numerical-model run in the job store (jobs.h: --job-workers threads, a queue of
  * --job-queue, 503 with Retry-After when full); 202 gives the job's id and its Location.
@@ -214,15 +218,16 @@ static enum MHD_Result route_not_found(struct MHD_Connection *c, request *r)
 
 /* First match wins; the last row matches everything. */
 static const struct route routes[] = {
-    {"/healthz", NULL, "GET, HEAD", 0, route_healthz},
-    {"/version", NULL, "GET, HEAD", 0, route_version},
-    {"/openapi.json", NULL, "GET, HEAD", 0, route_openapi},
-    {SIM_PATH, NULL, "POST", 1, route_sim_submit},
-    {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job},
-    {"/v1/", compute_exists, "POST", 1, route_compute},
-    {LJGAP_PROBLEM_BASE, problems_exists, "GET, HEAD", 0, route_problems},
-    {"/", static_exists, "GET, HEAD", 0, route_static},
-    {NULL, NULL, NULL, 0, route_not_found},
+    {"/healthz", NULL, "GET, HEAD", 0, route_healthz, 0},
+    {"/version", NULL, "GET, HEAD", 0, route_version, 0},
+    {"/openapi.json", NULL, "GET, HEAD", 0, route_openapi, 0},
+    {SIM_PATH, NULL, "POST", 1, route_sim_submit, 0},
+    {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job, 0},
+    {"/v1/psd", NULL, "POST", 1, route_psd, LJGAP_TEXT_MAX_BYTES},
+    {"/v1/", compute_exists, "POST", 1, route_compute, 0},
+    {LJGAP_PROBLEM_BASE, problems_exists, "GET, HEAD", 0, route_problems, 0},
+    {"/", static_exists, "GET, HEAD", 0, route_static, 0},
+    {NULL, NULL, NULL, 0, route_not_found, 0},
 };
 
 const struct route *route_find(const char *url)
@@ -249,6 +254,16 @@ int method_allowed(const char *allow, const char *method)
         p += strspn(p, ", ");
     }
     return 0;
+}
+
+int is_text_type(const char *ct)
+{
+    size_t n;
+    if (!ct) return 0;
+    ct += strspn(ct, " \t");
+    n = strcspn(ct, "; \t");
+    return (n == 10 && strncasecmp(ct, "text/plain", 10) == 0) ||
+           (n == 8 && strncasecmp(ct, "text/csv", 8) == 0);
 }
 
 int is_json_type(const char *ct)

@@ -219,3 +219,19 @@ int compute_exists(const char *rest)
 {
     return ljgap_handler_has(rest);
 }
+
+/* On a compute slot: a text upload (its body can be 64 MiB: no cache). */
+static void psd_text_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    ljgap_call call = {cancel, r->accept};
+    ljgap_handle_text("psd", r->params, r->nparams, r->body ? r->body : "", r->len, &call,
+                      &out->rep);
+}
+
+enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
+{
+    if (!r->text) return route_compute(c, r);
+    if (!r->task)
+        r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+    return route_offload(c, r, srv.slots, psd_text_work, NULL, 0);
+}

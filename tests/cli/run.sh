@@ -128,6 +128,43 @@ run adhesion
 check "negative dgamma is a 422 at /material/dgamma" jq_true \
     '.status == 422 and [.errors[].pointer] == ["/material/dgamma"]'
 
+# ---- psd: a height matrix as text (the options are the query) or a JSON topography ----
+awk 'BEGIN { for (j = 0; j < 32; j++) { for (i = 0; i < 32; i++)
+    printf "%s%.17g", i ? " " : "", 1e-9 * (sin(0.37 * i + 0.11 * j * j) + 0.3 * cos(1.7 * i * j));
+    printf "\n" } }' >"$tmp/map.txt"
+awk 'BEGIN { printf "{\"topography\":{\"dx\":1e-8,\"heights\":[" }
+    { printf "%s[", (NR > 1 ? "," : ""); for (i = 1; i <= NF; i++) printf "%s%s", (i > 1 ? "," : ""), $i;
+      printf "]" } END { printf "]}}" }' "$tmp/map.txt" >"$tmp/map.json"
+cp "$tmp/map.txt" "$tmp/in"
+run psd --dx 1e-8
+check "psd --dx from stdin exits 0 with one line" eval 'rc_is 0 && one_line'
+check "psd: bins, errors, fit, a psd table for adhesion" jq_true \
+    '(.k | length) > 5 and (.P | length) == (.k | length) and (.error.P | length) == (.k | length)
+     and .h_rms > 0 and .error.h_rms > 0 and (.fit == null or .error.fit.D > 0)
+     and .psd.kind == "table" and .meta.method == "periodogram" and .grid.window == "hann"'
+cp "$tmp/out" "$tmp/psd-text.json"
+: >"$tmp/in"
+run psd "$tmp/map.json"
+check "psd: the JSON topography gives the same answer as the text" eval \
+    'jq -e --slurpfile a "$tmp/psd-text.json" "del(.meta) == (\$a[0] | del(.meta))" "$tmp/out" >/dev/null'
+run psd --dx=1e-8 "$tmp/map.txt" --periodic
+check "psd: FILE after options, --periodic, --dx=V" jq_true \
+    '.grid.periodic == true and .grid.window == "none" and .grid.dx == 1e-8'
+run psd --dx 1e-8 --E_star 1e11 --dgamma 0.05 --epsilon 3e-10 "$tmp/map.txt"
+check "psd: a material in the options gives the domain" jq_true \
+    '.domain.k0 > 0 and (.domain.inside | IN("all","part","none")) and .si.chi_m > 0'
+printf '1 2 3\n4 five 6\n' >"$tmp/in"
+run psd --dx 1e-8 --bogus 1
+check "psd: bad text is exit 1, 422 with line and column, unknown option at its pointer" eval \
+    'rc_is 1 && jq_true ".status == 422 and any(.errors[]; .pointer == \"/topography/heights/1/1\"
+     and (.detail | startswith(\"line 2, column 3\"))) and any(.errors[]; .pointer == \"/bogus\")"'
+run psd --dx
+check "psd: an option without its value is a usage error (2)" rc_is 2
+run adhesion --dx 1e-8
+check "options for an endpoint without a text form are a usage error (2)" rc_is 2
+run psd --dx 1e-8 "$tmp/no-such-file"
+check "psd: an unreadable file exits 2" rc_is 2
+
 # ---- simulations: one numerical-model job in the foreground ----
 sim='"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1},"n":32,"realizations":2'
 echo "{$sim,\"g_ave\":[2,3]}" >"$tmp/in"

@@ -1,10 +1,11 @@
 /* fuzz_handler.c -- libFuzzer target on ljgap_handle_call, the one request handler.
  *
  * An input is "ENDPOINT\nBODY" or "ENDPOINT\tACCEPT\nBODY": the first line names the endpoint
- * (adhesion, traction, pdf, sweep, contact, or anything else for a 404; "simulations" goes
- * through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run, and then its result
- * through ljgap_sim_status_answer as a finished job's status when there is an Accept), and
- * after a tab the value of
+ * (adhesion, traction, pdf, sweep, contact, psd, or anything else for a 404; "simulations" goes
+ * through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run, and then, when there
+ * is an Accept, its result through ljgap_sim_status_answer as a finished job's status;
+ * "text:NAME?QUERY" is a text upload, ljgap_handle_text with the query split at '&' and '='
+ * into parameters, as the daemon hands them over after decoding), and after a tab the value of
  * the Accept header; the rest is the request body, handed over in a buffer of exactly its
  * length (no NUL after it), so that any read past the end is caught by AddressSanitizer. An
  * input without a newline is all endpoint name and an empty body.
@@ -25,7 +26,9 @@
  * finite (that would be NaN or Inf computed by the core and papered over with null);
  *   - problems: type /problems/..., title, status equal to the HTTP
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
- *     pointer that names a member of the request or a missing member of one that exists.
+ *     pointer that names a member of the request or a missing member of one that exists; for a
+ *     text upload, a cell, row or the whole of /topography/heights within the lines sent, a
+ *     field of /topography or /material, or /NAME of a parameter that was sent.
  *
  * The pseudo-endpoint "@x-forwarded-for" feeds the body (up to its first NUL) to
  * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
@@ -62,8 +65,12 @@ int ljgap_fuzz_noabort;
 long ljgap_fuzz_failures;
 
 /* The lowered limits: short computations, few points, few samples, two sweep threads. */
-static const ljgap_limits fuzz_limits = {
-    .max_seconds = 0.25, .max_samples = 2000, .max_points = 16, .sweep_threads = 2, .cancel = NULL};
+static const ljgap_limits fuzz_limits = {.max_seconds = 0.25,
+                                         .max_samples = 2000,
+                                         .max_points = 16,
+                                         .sweep_threads = 2,
+                                         .max_topo_points = 4096,
+                                         .cancel = NULL};
 
 /* A simulation runs for at most this long (it answers 422 cap-exceeded beyond). */
 static const ljgap_sim_control sim_control = {.max_seconds = 0.25};
@@ -161,7 +168,46 @@ static const char *pointer_problem(const cJSON *doc, const char *ptr)
     return why;
 }
 
-static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc, const cJSON *req)
+/* A text upload: its parameters and the number of lines of its body. */
+typedef struct {
+    ljgap_param p[64];
+    size_t np;
+    size_t lines;
+} text_req;
+
+/* 0 when ptr is a pointer a text upload may get (see the top of this file), else a reason. */
+static const char *text_pointer_problem(const text_req *t, const char *ptr)
+{
+    static const char *const fields[] = {"/topography/dx", "/topography/dy", "/topography/periodic",
+                                         "/material", NULL};
+    unsigned long row, col;
+    int used = 0, more = 0;
+    if (strcmp(ptr, "/topography/heights") == 0) return NULL;
+    if (sscanf(ptr, "/topography/heights/%lu%n", &row, &used) == 1 &&
+        (!ptr[used] || (sscanf(ptr + used, "/%lu%n", &col, &more) == 1 && !ptr[used + more])))
+        return row < t->lines ? NULL : "names a row beyond the lines sent";
+    for (int i = 0; fields[i]; i++)
+        if (strncmp(ptr, fields[i], strlen(fields[i])) == 0) return NULL;
+    for (size_t i = 0; i < t->np; i++) {
+        char want[200];
+        size_t k = 0;
+        want[k++] = '/';
+        for (const char *c = t->p[i].name; *c && k + 3 < sizeof want; c++) {
+            if (*c == '~' || *c == '/')
+                want[k++] = '~', want[k++] = *c == '~' ? '0' : '1';
+            else
+                want[k++] = *c;
+        }
+        want[k] = '\0';
+        /* the server cuts a name at 60 bytes or its first byte that is not UTF-8: a prefix of
+         * the name's pointer (down to "/") is fine */
+        if (strncmp(want, ptr, strlen(ptr)) == 0) return NULL;
+    }
+    return "names neither a field nor a parameter that was sent";
+}
+
+static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc, const cJSON *req,
+                          const text_req *text)
 {
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(doc, "type");
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(doc, "status");
@@ -182,6 +228,8 @@ static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc
         if (!cJSON_IsString(p) || !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(e, "detail")))
             breach(ep, r, "an errors[] entry without a string pointer and detail");
         else if (req && (why = pointer_problem(req, p->valuestring)))
+            breach(ep, r, "pointer \"%.100s\" %s", p->valuestring, why);
+        else if (text && (why = text_pointer_problem(text, p->valuestring)))
             breach(ep, r, "pointer \"%.100s\" %s", p->valuestring, why);
     }
 }
@@ -312,6 +360,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     char *ep = malloc(eplen + 1), *body = malloc(len ? len : 1), *accept = NULL;
     ljgap_reply r = {0};
     cJSON *doc = NULL, *req = NULL;
+    text_req *text = NULL;
     const char *end = NULL;
     int known;
     if (!ep || !body) goto end;
@@ -324,7 +373,27 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         goto end;
     }
     known = ljgap_handler_has(ep);
-    if (strcmp(ep, "simulations") == 0) {
+    if (strncmp(ep, "text:", 5) == 0) {
+        /* "text:NAME?a=1&b": split the query in place (ep is ours) */
+        char *q = strchr(ep + 5, '?'), *save = NULL;
+        text = calloc(1, sizeof *text);
+        if (!text) goto end;
+        if (q) *q++ = '\0';
+        for (char *t = q ? strtok_r(q, "&", &save) : NULL; t && text->np < 64;
+             t = strtok_r(NULL, "&", &save)) {
+            char *eq = strchr(t, '=');
+            text->p[text->np].name = t;
+            text->p[text->np++].value = eq ? (*eq = '\0', eq + 1) : NULL;
+        }
+        for (size_t i = 0; i < len; i++)
+            text->lines += body[i] == '\n';
+        text->lines++;
+        known = ljgap_handler_has_text(ep + 5);
+        {
+            ljgap_call call = {.accept = accept};
+            ljgap_handle_text(ep + 5, text->p, text->np, body, len, &call, &r);
+        }
+    } else if (strcmp(ep, "simulations") == 0) {
         ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, &r);
         known = 1;
         if (sr) ljgap_sim_request_run(sr, &sim_control, &r);
@@ -359,12 +428,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         check_ok(ep, &r, res && !strcmp(ep, "simulations") ? res : doc);
     } else {
         /* pointers are checked against the request when it is JSON (422 answers) */
-        if (r.status == 422) req = cJSON_ParseWithLength(body, len);
-        check_problem(ep, &r, doc, req);
+        if (r.status == 422 && !text) req = cJSON_ParseWithLength(body, len);
+        check_problem(ep, &r, doc, req, r.status == 422 ? text : NULL);
     }
 end:
     cJSON_Delete(doc);
     cJSON_Delete(req);
+    free(text);
     ljgap_reply_free(&r);
     free(ep);
     free(body);

@@ -82,7 +82,7 @@ check "/version matches LJGAP_VERSION ($version)" json --arg v "$version" '.vers
 req GET /openapi.json
 check "GET /openapi.json: OpenAPI 3 JSON" \
     eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
-for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations; do
+for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations /v1/psd; do
     check "openapi: POST $p with 400, 413, 415, 422 and 503 problems" \
         json --arg p "$p" '.paths[$p].post.responses | has("400") and has("413") and has("415")
             and has("422") and has("503")'
@@ -150,6 +150,56 @@ check "POST /v1/sweep: 200 with one result per value" eval '[ "$STATUS" = 200 ] 
 post contact "{$PSD,\"material\":{\"E_star\":1e9,\"dgamma\":0.05,\"epsilon\":3e-10},\"R\":1e-6}"
 check "POST /v1/contact: 200 with pull_off_N and si" eval '[ "$STATUS" = 200 ] &&
     json "(.pull_off_N.jkr | type == \"number\") and (.si | type == \"object\")"'
+
+# ---- psd: a height matrix as JSON, or as text with its query (64 MiB for this route only) ----
+awk 'BEGIN { for (j = 0; j < 32; j++) { for (i = 0; i < 32; i++)
+    printf "%s%.6e", (i ? " " : ""), 1e-9 * (sin(0.37 * i + 0.11 * j * j) + 0.3 * cos(1.7 * i * j));
+    printf "\n" } }' >"$tmp/map.txt"
+req POST "/v1/psd?dx=1e-8" -H 'Content-Type: text/plain' --data-binary @"$tmp/map.txt"
+check "POST /v1/psd text/plain ?dx=: 200 with bins, errors, h_rms and a psd table" eval \
+    '[ "$STATUS" = 200 ] && json "(.k | length) > 5 and (.error.P | length) == (.k | length)
+     and .h_rms > 0 and .error.h_rms > 0 and .psd.kind == \"table\" and .meta.cached == false"'
+cp "$tmp/body" "$tmp/psd-text.json"
+tr ' ' ',' <"$tmp/map.txt" | sed 's/$/\r/' >"$tmp/map.csv"
+req POST "/v1/psd?periodic=false&dx=1e-8" -H 'Content-Type: text/csv; charset=utf-8' \
+    --data-binary @"$tmp/map.csv"
+same_psd() { [ "$(jq -c 'del(.meta)' "$tmp/body")" = "$(jq -c 'del(.meta)' "$tmp/psd-text.json")" ]; }
+check "POST /v1/psd text/csv (commas, CR LF): the same answer" eval '[ "$STATUS" = 200 ] && same_psd'
+awk 'BEGIN { printf "{\"topography\":{\"dx\":1e-8,\"heights\":[" }
+    { printf "%s[", (NR > 1 ? "," : ""); for (i = 1; i <= NF; i++) printf "%s%s", (i > 1 ? "," : ""), $i;
+      printf "]" } END { printf "]}}" }' "$tmp/map.txt" >"$tmp/map.json"
+req POST /v1/psd -H 'Content-Type: application/json' --data-binary @"$tmp/map.json"
+check "POST /v1/psd JSON: the same answer as the text" eval '[ "$STATUS" = 200 ] && same_psd'
+req POST /v1/psd -H 'Content-Type: application/json' --data-binary @"$tmp/map.json"
+check "POST /v1/psd JSON again: from the cache" json '.meta.cached == true'
+printf '1 2 3\n4 x 6\n' >"$tmp/bad.txt"
+req POST "/v1/psd?dx=1e-8&bogus=1" -H 'Content-Type: text/plain' --data-binary @"$tmp/bad.txt"
+check "POST /v1/psd bad text: 422, the cell's pointer with line and column, the unknown parameter" \
+    eval 'problem 422 && json "any(.errors[]; .pointer == \"/topography/heights/1/1\"
+        and (.detail | startswith(\"line 2, column 3\"))) and any(.errors[]; .pointer == \"/bogus\")"'
+req POST "/v1/psd?dx=1e-8" -H 'Content-Type: application/xml' --data-binary @"$tmp/map.txt"
+check "POST /v1/psd application/xml: 415 naming JSON and text" eval 'problem 415 &&
+    json ".detail | test(\"text/plain\")"'
+req POST "/v1/adhesion?dx=1e-8" -H 'Content-Type: text/plain' --data-binary @"$tmp/map.txt"
+check "POST /v1/adhesion text/plain: 415 (text is psd's only)" problem 415
+# a text map over the JSON limit (~3.6 MB), sent with a length and chunked: accepted
+awk 'BEGIN { srand(3); for (j = 0; j < 256; j++) { for (i = 0; i < 1024; i++)
+    printf "%s%.6e", (i ? " " : ""), 1e-9 * rand(); printf "\n" } }' >"$tmp/big.txt"
+req POST "/v1/psd?dx=1e-8" -H 'Content-Type: text/plain' --data-binary @"$tmp/big.txt"
+check "POST /v1/psd text over 1 MiB ($(wc -c <"$tmp/big.txt") bytes): 200" eval '[ "$STATUS" = 200 ] &&
+    json ".grid.nx == 1024 and .grid.ny == 256"'
+req POST "/v1/psd?dx=1e-8" -H 'Content-Type: text/plain' -H 'Transfer-Encoding: chunked' \
+    --data-binary @"$tmp/big.txt"
+check "the same chunked: 200" eval '[ "$STATUS" = 200 ] && json ".grid.nx == 1024"'
+{ printf '{"topography":{"dx":1e-8,"heights":[['; head -c 1100000 /dev/zero | tr '\0' ' ';
+    printf '1]]}}'; } >"$tmp/big.json"
+req POST /v1/psd -H 'Content-Type: application/json' --data-binary @"$tmp/big.json"
+check "POST /v1/psd JSON over 1 MiB: 413 (JSON keeps the 1 MiB limit)" problem 413
+head -c $((64 * 1024 * 1024 + 1)) /dev/zero | tr '\0' ' ' >"$tmp/huge.txt"
+req POST "/v1/psd?dx=1e-8" -H 'Content-Type: text/plain' --data-binary @"$tmp/huge.txt"
+check "POST /v1/psd text of 64 MiB + 1 byte: 413 naming 67108864 bytes" eval 'problem 413 &&
+    json ".detail | test(\"67108864\")"'
+rm -f "$tmp/huge.txt" "$tmp/big.txt"
 
 # ---- problems ----
 post adhesion '{"psd":'

@@ -20,6 +20,8 @@
 #include "ljgap.h"
 
 #include <cjson/cJSON.h>
+
+#include "../lib/oom.h"
 #include <gsl/gsl_errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -399,44 +401,11 @@ static void outside_model(void **state)
     cJSON_Delete(a.body);
 }
 
-/* cJSON allocator that fails the n-th allocation from now. */
-static long alloc_left = -1;
-static void *failing_malloc(size_t n)
-{
-    if (alloc_left == 0) return NULL;
-    if (alloc_left > 0) alloc_left--;
-    return malloc(n);
-}
-
 static void out_of_memory(void **state)
 {
-    const char *req = "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":2,\"m0\":1e-4},"
-                      "\"tol\":1e-3}";
-    cJSON_Hooks hooks = {failing_malloc, free};
-    int saw_oom = 0, saw_ok = 0;
-    for (long n = 0; n < 400 && !saw_ok; n++) {
-        ljgap_reply r;
-        alloc_left = n;
-        cJSON_InitHooks(&hooks);
-        ljgap_handle("adhesion", req, strlen(req), &r);
-        cJSON_InitHooks(NULL);
-        alloc_left = -1;
-        assert_non_null(r.body);
-        if (r.status == 500) {
-            cJSON *p = cJSON_Parse(r.body);
-            assert_non_null(p);
-            assert_string_equal(str(p, "type"), "/problems/out-of-memory");
-            assert_string_equal(r.content_type, "application/problem+json");
-            cJSON_Delete(p);
-            saw_oom = 1;
-        } else {
-            assert_int_equal(r.status, 200);
-            saw_ok = 1;
-        }
-        ljgap_reply_free(&r);
-    }
-    assert_true(saw_oom);
-    assert_true(saw_ok);
+    oom_sweep("adhesion",
+              "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"k2\":2,\"m0\":1e-4},\"tol\":1e-3}",
+              400);
 }
 
 /* ---- success paths ---- */

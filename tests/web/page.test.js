@@ -5,8 +5,9 @@
 // Checks: the page loads under its Content-Security-Policy with the vendored uPlot; presets draw
 // (canvas pixels inked, readouts filled, numbers against theory.md §4's reference values); hover
 // readouts; a 422 problem lands beside the field its pointer names; exports (CSV, JSON, PNG,
-// "copy as curl" re-run with curl gives the same numbers); not a single console error (the
-// icon included); no request leaves the local server. Leaves screenshots in
+// "copy as curl" re-run with curl gives the same numbers); a measured topography: upload, its PSD
+// and fit, k1/k2 picked on the plot, the adhesion of the spectrum; not a single console error
+// (the icon included); no request leaves the local server. Leaves screenshots in
 // $BUILD/web-screenshot*.png.
 // Chromium logs every 4xx answer the page fetches as a console error ("Failed to load
 // resource"), however the page handles it. So the two tests of problems beside their fields take
@@ -297,6 +298,65 @@ test("simulation jobs: a form with a progress bar when the server offers them, e
   await page.evaluate((p) => LJJobs.refused(422, p), problem);
   assert.equal(await page.evaluate(() => document.getElementById("sim-state").dataset.status), "refused");
   assert.match(await page.textContent('.err[data-for="sim-n"]'), /even/);
+});
+
+test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on the plot, adhesion", async () => {
+  // a 128² synthetic map (bench/topo gen: D = 2.3, dx = 10 nm, h_rms 5 nm) as a text file
+  const file = path.join(userDir, "map.txt");
+  execFileSync(path.join(BUILD, "bench/topo"), ["gen", file, "128"]);
+  await page.check("#use-material");
+  await page.selectOption("#modulus-kind", "E_star");
+  await page.fill("#E_star", "1e11"); // χ = 34 nm: k0/χ = 1.4e7 1/m, inside the map's band
+  await page.setInputFiles("#topo-file", file);
+  await page.fill("#topo-dx", "1e-8");
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of|refused/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent("#status-text"), /^PSD of map\.txt: \d+ bins/);
+  assert.ok(await page.isVisible("#card-topo"));
+  assert.ok((await inked("plot-topo")) > 500, "topography PSD canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")));
+  assert.equal(fig.xLog && fig.yLog, true);
+  assert.equal(fig.series[0].name, "P (bins, m⁴)");
+  assert.match(fig.series[1].name, /^fit: D = /);
+  assert.ok(fig.marks.some((m) => m.label === "k0/χ") && fig.marks.some((m) => m.label === "k1"));
+  const rows = await page.$$eval("#readout-topo table tr", (r) => r.map((x) => [...x.children].map((c) => c.textContent)));
+  const byName = Object.fromEntries(rows.map((r) => [r[0], r.slice(1)]));
+  const D = Number(byName["D (H = 3 − D)"][0]);
+  assert.ok(Math.abs(D - 2.3) < 0.1, `D ${D}`);
+  assert.match(byName["D (H = 3 − D)"][1], /^± \d\.\de-\d+$/);
+  assert.match(byName.h_rms[0], /e-9 m$/);
+  assert.match(await page.textContent("#readout-topo"), /theory's domain k > k0\/χ/);
+  const k1 = Number(await page.inputValue("#topo-k1"));
+  assert.ok(k1 >= 1.1 * 0.46978 / 3.375e-8 * 0.999, `k1 ${k1}`);
+  // a click on the plot sets k2 where the cursor is
+  await page.selectOption("#topo-pick", "k2");
+  const box = await page.locator("#plot-topo .u-over").boundingBox();
+  await page.mouse.click(box.x + box.width * 0.8, box.y + box.height * 0.5);
+  const k2 = Number(await page.inputValue("#topo-k2"));
+  assert.ok(k2 > k1 && Number.isFinite(k2), `k2 ${k2} after the click`);
+  assert.ok((await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")))).marks.some((m) => m.label === "k2"));
+  await page.click("#topo-adhesion");
+  await page.waitForFunction(() => /^Adhesion of the measured|refused/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /Δγeff\/Δγ = /);
+  const ad = await page.textContent("#readout-topo-adhesion");
+  assert.match(ad, /Δγeff\/Δγ/);
+  assert.match(ad, new RegExp(`to k2 = `));
+  const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  const adReq = json.requests.find((r) => r.label === "adhesion").body;
+  assert.equal(adReq.units, "SI");
+  assert.equal(adReq.psd.k[0], k1);
+  assert.equal(adReq.psd.k[adReq.psd.k.length - 1], k2);
+  await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-topo.png"), fullPage: true });
+  // a bad matrix: the line and column beside the file field (the server's answer to the upload
+  // the page would send, see the note at the top)
+  const q = await page.evaluate(() => LJTopo.query());
+  const res = await fetch(`${origin}/v1/psd?${q}`, { method: "POST", headers: { "Content-Type": "text/plain" }, body: "1 2 3\n4 x 6\n" });
+  assert.equal(res.status, 422);
+  await page.evaluate((p) => LJTopo.refused(422, p), await res.json());
+  assert.match(await page.textContent("#status-text"), /refused/);
+  assert.match(await page.textContent('.err[data-for="topo-file"]'), /line 2, column 3/);
+  await page.fill("#E_star", "1e9");
 });
 
 test("the icon: /favicon.svg linked and served, /favicon.ico served (no 404)", async () => {

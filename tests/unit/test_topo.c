@@ -1,0 +1,565 @@
+/* test_topo.c -- core/topo.c: the isotropic PSD of a height map, against synthetic surfaces of
+ * known PSD (tests/lib/synth.h, core/sim.c's conventions: fixed amplitudes √(P Δq²), random
+ * phases, so the periodogram is the law at every wavevector).
+ *
+ *   - periodic 512 × 512, P = C k^(2D-8) over the whole grid: P within 3 % of the law in every
+ *     bin, D within 0.02 (in fact ~1e-3), h_rms and m0 exact to round-off, the rms slope exact;
+ *   - a non-periodic crop of a larger periodic surface (plane + Hann window): D within 0.05;
+ *   - the error estimates are honest: over many Gaussian surfaces (random amplitudes) the
+ *     spread of P per bin, of h_rms, of the slope and of D matches the reported errors, for
+ *     periodic maps and for windowed crops, and D has no bias beyond its error;
+ *   - profiles: the rows of a synthetic isotropic surface, each converted to the isotropic PSD,
+ *     average to the 2-D law (within 5 % inside the band) and give D; columns as rows;
+ *   - the conversions the README gives (SurfaceTopography's C = (2π)² P, the 1/λ tools' S(f) =
+ *     (2π)² P(2πf), radial S_r(f) = 2πf S(f) with exponent 2D - 7, profile PSDs 2π PP and
+ *     4π PP), each checked by normalising the synthetic surface the other tool's way;
+ *   - bad maps: too small, non-finite, all equal, a plane.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include "ljgap_topo.h"
+
+#include "../lib/synth.h"
+
+#include <gsl/gsl_errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DX 1e-8 /* 10 nm spacing: a 512-point side is 5.12 µm */
+
+/* Fails with both values when |got - want| > tol. */
+static void near(double got, double want, double tol, const char *what)
+{
+    if (!(fabs(got - want) <= tol))
+        fail_msg("%s: got %.17g, want %.17g (tolerance %.3g)", what, got, want, tol);
+}
+
+/* The law over the whole grid of an n-point side of spacing d: from the fundamental to the
+ * Nyquist circle, level so that h_rms is about 1 nm. */
+static synth_law full_law(size_t n, double d, double D)
+{
+    synth_law l = {1.0, D, 2 * M_PI / ((double)n * d), M_PI / d};
+    double v = 2 * M_PI * (pow(l.k2, 2 * D - 6) - pow(l.k1, 2 * D - 6)) / (2 * D - 6);
+    l.C = 1e-18 / v;
+    return l;
+}
+
+static double *map_alloc(size_t n)
+{
+    double *h = malloc(n * sizeof *h);
+    assert_non_null(h);
+    return h;
+}
+
+static void compute(const double *h, size_t nx, size_t ny, double dx, int periodic,
+                    ljgap_topo_result *r)
+{
+    ljgap_topo_grid g = {nx, ny, dx, dx, periodic};
+    ljgap_warnings w = {0};
+    int st = ljgap_topo_compute(h, &g, NULL, r, &w);
+    if (st) fail_msg("ljgap_topo_compute: %s (%s)", ljgap_strerror(st), w.n ? w.msg[0] : "");
+}
+
+/* ---- periodic maps ---- */
+
+static void periodic_power_law(void **state)
+{
+    const size_t n = 512;
+    const double D = 2.3;
+    synth_law l = full_law(n, DX, D);
+    synth_moments mom;
+    double *h = map_alloc(n * n);
+    ljgap_topo_result r;
+    assert_int_equal(synth_surface(h, n, n, DX, DX, &l, 7, 0, &mom), 0);
+    compute(h, n, n, DX, 1, &r);
+    /* h_rms and the moments are the lattice sums, to round-off */
+    near(r.h_rms.value, sqrt(mom.m0), 1e-12 * sqrt(mom.m0), "h_rms");
+    near(r.m0_spectrum, mom.m0, 1e-11 * mom.m0, "m0 of the spectrum");
+    near(r.rms_slope.value, sqrt(mom.m2), 1e-11 * sqrt(mom.m2), "rms slope");
+    assert_true(r.h_rms.err > 0 && r.h_rms.err < r.h_rms.value); /* the first modes dominate */
+    assert_true(r.rms_slope.err > 0 && r.rms_slope.err < 0.01 * r.rms_slope.value);
+    /* P in every bin within 1 % of the law at the bin's k (the bin's mean periodogram, corrected
+     * for the law's curvature across the bin, 3 % here; see core/topo.c) */
+    double worst = 0;
+    for (size_t i = 0; i < r.n; i++) {
+        double dev = fabs(r.P[i] / synth_P(&l, r.k[i]) - 1);
+        worst = fmax(worst, dev);
+        assert_true(r.P_err[i] > 0);
+    }
+    if (worst > 0.01) fail_msg("P deviates from the law by %.3g somewhere", worst);
+    assert_true(r.has_fit);
+    near(r.fit.D.value, D, 0.02, "D");
+    assert_true(r.fit.D.err > 0 && r.fit.D.err < 0.02);
+    /* C: the fitted law in the middle of the band (C alone is correlated with D) */
+    double km = sqrt(r.fit.kmin * r.fit.kmax);
+    near(r.fit.C.value * pow(km, 2 * r.fit.D.value - 8) / synth_P(&l, km), 1, 0.02, "P_fit(mid)");
+    near(r.fit.kmin, r.k[0], 0, "fit from the first bin");
+    printf("# periodic 512: D = %.5f ± %.5f (true %.2f), worst bin %.2f %%, h_rms = %.6g ± %.2g\n",
+           r.fit.D.value, r.fit.D.err, D, 100 * worst, r.h_rms.value, r.h_rms.err);
+    ljgap_topo_result_free(&r);
+    free(h);
+}
+
+/* A band-limited law inside the grid: the bins outside it are empty of power, so P there is 0
+ * and they must not be reported with P > 0; the fit band is given. */
+static void fit_band_option(void **state)
+{
+    const size_t n = 256;
+    synth_law l = full_law(n, DX, 2.6);
+    synth_moments mom;
+    double *h = map_alloc(n * n);
+    ljgap_topo_grid g = {n, n, DX, DX, 1};
+    ljgap_topo_opts o;
+    ljgap_topo_result r;
+    assert_int_equal(synth_surface(h, n, n, DX, DX, &l, 3, 0, &mom), 0);
+    ljgap_topo_opts_default(&o);
+    o.fit_kmin = 10 * l.k1;
+    o.fit_kmax = 50 * l.k1;
+    o.bins_per_decade = 20;
+    assert_int_equal(ljgap_topo_compute(h, &g, &o, &r, NULL), LJGAP_OK);
+    assert_true(r.has_fit);
+    assert_true(r.fit.kmin >= o.fit_kmin && r.fit.kmax <= o.fit_kmax);
+    assert_true(r.fit.bins >= 10);
+    near(r.fit.D.value, 2.6, 0.02, "D in the given band");
+    ljgap_topo_result_free(&r);
+    free(h);
+}
+
+/* ---- non-periodic: a crop of a larger periodic surface ---- */
+
+static void crop(const double *big, size_t nb, size_t n, size_t off, double *out)
+{
+    for (size_t j = 0; j < n; j++)
+        memcpy(out + j * n, big + (j + off) * nb + off, n * sizeof *out);
+}
+
+static void nonperiodic_crop(void **state)
+{
+    const size_t nb = 1024, n = 512;
+    const double Ds[] = {2.2, 2.5, 2.8};
+    double *big = map_alloc(nb * nb), *h = map_alloc(n * n);
+    for (size_t t = 0; t < 3; t++) {
+        synth_law l = full_law(nb, DX, Ds[t]);
+        synth_moments mom;
+        ljgap_topo_result r;
+        assert_int_equal(synth_surface(big, nb, nb, DX, DX, &l, 11 + t, 0, &mom), 0);
+        crop(big, nb, n, 200, h);
+        compute(h, n, n, DX, 0, &r);
+        assert_true(r.has_fit);
+        printf("# crop 512 of 1024: D = %.4f ± %.4f (true %.2f), chi2_red %.2f, band [%.3g, %.3g]"
+               ", h_rms %.4g (surface %.4g)\n",
+               r.fit.D.value, r.fit.D.err, Ds[t], r.fit.chi2_red, r.fit.kmin, r.fit.kmax,
+               r.h_rms.value, sqrt(mom.m0));
+        near(r.fit.D.value, Ds[t], 0.05, "D of a non-periodic crop");
+        /* windowed bins above the fit's start: within 3 errors and 5 % of the law (a crop
+         * mixes the big surface's modes: its bins scatter like a random surface's) */
+        for (size_t i = 0; i < r.n; i++)
+            if (r.k[i] >= r.fit.kmin)
+                near(r.P[i] / synth_P(&l, r.k[i]), 1, 3 * r.P_err[i] / r.P[i] + 0.05,
+                     "windowed P / law");
+        ljgap_topo_result_free(&r);
+    }
+    free(big);
+    free(h);
+}
+
+/* ---- honest errors: the spread over realizations against the reported errors ---- */
+
+/* Σ over groups of (spread of x over realizations)² and of (mean reported err²): their ratio's
+ * root is the spread per unit of reported error (1 for honest errors). */
+typedef struct {
+    double s2; /* Σ sample variances */
+    double e2; /* Σ mean squared errors */
+} spread;
+
+/* one group: R realizations of x with errors err, stride apart */
+static void spread_add(spread *s, const double *x, const double *err, size_t R, size_t stride)
+{
+    double m = 0, v = 0, e = 0;
+    for (size_t r = 0; r < R; r++)
+        m += x[r * stride];
+    m /= (double)R;
+    for (size_t r = 0; r < R; r++) {
+        v += (x[r * stride] - m) * (x[r * stride] - m);
+        e += err[r * stride] * err[r * stride];
+    }
+    s->s2 += v / (double)(R - 1);
+    s->e2 += e / (double)R;
+}
+
+static double spread_rms(const spread *s)
+{
+    return sqrt(s->s2 / s->e2);
+}
+
+static void honest_errors_case(int periodic)
+{
+    const size_t R = 40, nb = periodic ? 128 : 256, n = 128;
+    synth_law l = full_law(nb, DX, 2.4);
+    double *big = map_alloc(nb * nb), *h = map_alloc(n * n);
+    double *P = NULL, *Pe = NULL, hr[40], he[40], sl[40], se[40], D[40], De[40];
+    size_t nbins = 0;
+    spread sP = {0}, sh = {0}, ss = {0}, sD = {0};
+    for (size_t r = 0; r < R; r++) {
+        synth_moments mom;
+        ljgap_topo_result res;
+        assert_int_equal(synth_surface(big, nb, nb, DX, DX, &l, 100 + r, 1, &mom), 0);
+        if (periodic)
+            memcpy(h, big, n * n * sizeof *h);
+        else
+            crop(big, nb, n, 64, h);
+        compute(h, n, n, DX, periodic, &res);
+        if (!P) {
+            nbins = res.n;
+            P = map_alloc(R * nbins);
+            Pe = map_alloc(R * nbins);
+        }
+        assert_int_equal(res.n, nbins);
+        memcpy(P + r * nbins, res.P, nbins * sizeof *P);
+        memcpy(Pe + r * nbins, res.P_err, nbins * sizeof *Pe);
+        hr[r] = res.h_rms.value, he[r] = res.h_rms.err;
+        sl[r] = res.rms_slope.value, se[r] = res.rms_slope.err;
+        assert_true(res.has_fit);
+        D[r] = res.fit.D.value, De[r] = res.fit.D.err;
+        ljgap_topo_result_free(&res);
+    }
+    /* every bin alike: spreads and errors relative to the bin's mean P */
+    for (size_t b = 0; b < nbins; b++) {
+        spread one = {0};
+        spread_add(&one, P + b, Pe + b, R, nbins);
+        double m = 0;
+        for (size_t r = 0; r < R; r++)
+            m += P[r * nbins + b] / (double)R;
+        sP.s2 += one.s2 / (m * m), sP.e2 += one.e2 / (m * m);
+    }
+    spread_add(&sh, hr, he, R, 1);
+    spread_add(&ss, sl, se, R, 1);
+    spread_add(&sD, D, De, R, 1);
+    /* and D without bias: the mean over the realizations within 3 standard errors of it */
+    double Dm = 0, De2 = 0;
+    for (size_t r = 0; r < R; r++)
+        Dm += D[r] / (double)R, De2 += De[r] * De[r] / (double)R;
+    printf("# %s, %zu Gaussian surfaces: spread / error: P %.3f, h_rms %.3f, slope %.3f, D %.3f;"
+           " mean D %.4f ± %.4f (true 2.4)\n",
+           periodic ? "periodic 128" : "windowed crops 128", R, spread_rms(&sP), spread_rms(&sh),
+           spread_rms(&ss), spread_rms(&sD), Dm, sqrt(De2 / (double)R));
+    near(Dm, 2.4, 3 * sqrt(De2 / (double)R), "mean D over Gaussian surfaces");
+    /* 40 samples: ±20 % is a 2-sigma band for the single numbers; the bins pool many */
+    near(spread_rms(&sP), 1, 0.2, "P: spread / error");
+    near(spread_rms(&sh), 1, 0.45, "h_rms: spread / error");
+    near(spread_rms(&ss), 1, 0.45, "slope: spread / error");
+    near(spread_rms(&sD), 1, 0.45, "D: spread / error");
+    free(P);
+    free(Pe);
+    free(big);
+    free(h);
+}
+
+static void honest_errors_periodic(void **state)
+{
+    honest_errors_case(1);
+}
+
+static void honest_errors_windowed(void **state)
+{
+    honest_errors_case(0);
+}
+
+/* ---- profiles ---- */
+
+static void abel_factor(void **state)
+{
+    near(ljgap_topo_abel_factor(2), 0.5, 1e-14, "F(2)");
+    near(ljgap_topo_abel_factor(1), 1 / M_PI, 1e-14, "F(1)");
+    near(ljgap_topo_abel_factor(3), 2 / M_PI, 1e-14, "F(3)"); /* Γ(2)/(√π Γ(3/2)) */
+    assert_true(isnan(ljgap_topo_abel_factor(0)));
+}
+
+/* Every row (or column) of `surfaces` periodic n² surfaces as a profile: the converted PSD,
+ * averaged over the rows, against the 2-D law. The surfaces are band-limited to the disc
+ * |k| <= k2 = π/dx, so a profile near k2 lacks the ky beyond the disc (its PP falls below the
+ * Abel transform of the law): the fits and the comparison stop at k2/4. A windowed profile of
+ * one surface mixes neighbouring kx of the same ky, whose cross terms do not average out over
+ * the rows of one realization: several surfaces, and a wider tolerance. */
+static void profiles_case(size_t n, size_t surfaces, int columns, int periodic, double tol)
+{
+    const double D = 2.3;
+    synth_law l = full_law(n, DX, D);
+    synth_moments mom;
+    double *h = map_alloc(n * n), *line = map_alloc(n), *mean = NULL, *k = NULL, Dsum = 0;
+    double kfrom = (periodic ? 4 : 8) * l.k1;
+    size_t nbins = 0, cnt = surfaces * n;
+    ljgap_topo_opts o;
+    ljgap_topo_opts_default(&o);
+    o.fit_kmin = kfrom;
+    o.fit_kmax = l.k2 / 4;
+    for (size_t s = 0; s < surfaces; s++) {
+        assert_int_equal(synth_surface(h, n, n, DX, DX, &l, 21 + s, 0, &mom), 0);
+        for (size_t row = 0; row < n; row++) {
+            ljgap_topo_result r;
+            double ss = 0, mu = 0;
+            for (size_t i = 0; i < n; i++)
+                mu += (line[i] = columns ? h[i * n + row] : h[row * n + i]) / (double)n;
+            for (size_t i = 0; i < n; i++)
+                ss += (line[i] - mu) * (line[i] - mu);
+            ljgap_topo_grid g = {columns ? 1 : n, columns ? n : 1, DX, DX, periodic};
+            ljgap_warnings w = {0};
+            int st = ljgap_topo_compute(line, &g, &o, &r, &w);
+            if (st) fail_msg("row %zu: %s", row, w.n ? w.msg[0] : ljgap_strerror(st));
+            assert_true(r.profile);
+            if (periodic)
+                near(r.h_rms.value, sqrt(ss / (double)n), 1e-12 * sqrt(ss / n), "row h_rms");
+            if (!mean) {
+                nbins = r.n;
+                mean = calloc(nbins, sizeof *mean);
+                k = map_alloc(nbins);
+                assert_non_null(mean);
+                memcpy(k, r.k, nbins * sizeof *k);
+            }
+            assert_int_equal(r.n, nbins);
+            for (size_t b = 0; b < nbins; b++)
+                mean[b] += r.P[b] / (double)cnt;
+            assert_true(r.has_fit);
+            near(r.alpha.value, 7 - 2 * r.fit.D.value, r.alpha.err, "alpha = 7 - 2D");
+            Dsum += r.fit.D.value / (double)cnt;
+            ljgap_topo_result_free(&r);
+        }
+    }
+    double worst = 0;
+    for (size_t b = 0; b < nbins; b++)
+        if (k[b] >= kfrom && k[b] <= l.k2 / 4)
+            worst = fmax(worst, fabs(mean[b] / synth_P(&l, k[b]) - 1));
+    printf("# %s of %zu %zu² surface(s) (%s): mean D = %.4f (true %.2f), converted P within "
+           "%.2f %% of the 2-D law on [%.0f k1, k2/4]\n",
+           columns ? "columns" : "rows", surfaces, n, periodic ? "periodic" : "windowed", Dsum, D,
+           100 * worst, kfrom / l.k1);
+    if (worst > tol) fail_msg("profiles: converted P off the 2-D law by %.3g", worst);
+    near(Dsum, D, periodic ? 0.02 : 0.05, "mean D of the profiles");
+    free(mean);
+    free(k);
+    free(line);
+    free(h);
+}
+
+static void profiles_rows(void **state)
+{
+    profiles_case(512, 1, 0, 1, 0.03);
+}
+
+static void profiles_columns(void **state)
+{
+    profiles_case(512, 1, 1, 1, 0.03);
+}
+
+static void profiles_windowed(void **state)
+{
+    profiles_case(512, 8, 0, 0, 0.06);
+}
+
+/* ---- the conversions of the README, each by the other tool's own normalisation ---- */
+
+static void conversions(void **state)
+{
+    const size_t n = 256, nxc = n / 2 + 1;
+    const double D = 2.4, L = (double)n * DX, dq = 2 * M_PI / L;
+    synth_law l = full_law(n, DX, D);
+    synth_moments mom;
+    double *h = map_alloc(n * n), *a = map_alloc(n * n);
+    fftw_complex *c = fftw_alloc_complex(n * nxc);
+    ljgap_topo_result r;
+    assert_non_null(c);
+    assert_int_equal(synth_surface(h, n, n, DX, DX, &l, 5, 0, &mom), 0);
+    compute(h, n, n, DX, 1, &r);
+
+    /* SurfaceTopography (power_spectrum_from_area): C(q) = |dx dy FFT(h)|² / (Lx Ly) at the
+     * angular q, h_rms² = (2π)^-2 ∫∫ C d²q. Per wavevector: C = (2π)² P_law(|q|). */
+    memcpy(a, h, n * n * sizeof *a);
+    fftw_plan p = fftw_plan_dft_r2c_2d((int)n, (int)n, a, c, FFTW_ESTIMATE);
+    fftw_execute(p);
+    fftw_destroy_plan(p);
+    double sumC = 0, worst = 0;
+    for (size_t j = 0; j < n; j++)
+        for (size_t i = 0; i < nxc; i++) {
+            double qy = dq * (j <= n / 2 ? (double)j : (double)j - (double)n),
+                   q = hypot(dq * i, qy);
+            double z2 =
+                c[j * nxc + i][0] * c[j * nxc + i][0] + c[j * nxc + i][1] * c[j * nxc + i][1];
+            double C_st = DX * DX * DX * DX * z2 / (L * L), mult = (i == 0 || 2 * i == n) ? 1 : 2;
+            sumC += mult * C_st * dq * dq;
+            if (q >= l.k1 && q < 0.99 * l.k2)
+                worst = fmax(worst, fabs(C_st / (4 * M_PI * M_PI * synth_P(&l, q)) - 1));
+        }
+    near(sumC / (4 * M_PI * M_PI), mom.m0, 1e-10 * mom.m0, "ST: (2π)^-2 ∫∫C d²q = h_rms²");
+    /* the 1/λ 2-D PSD S(f) = (2π)² P(2πf) takes the same values as C at f = q/2π, and its lattice
+     * has Δf = 1/L: ∫∫ S d²f = Σ S / L² */
+    near(sumC / (dq * dq) / (L * L), mom.m0, 1e-10 * mom.m0, "1/λ: ∫∫S d²f = h_rms²");
+    near(worst, 0, 1e-9, "ST: C = (2π)² P at every wavevector");
+
+    /* 1/λ tools: S(f) with ∫∫ S d²f = h_rms², f = k/2π: S(f) = (2π)² P(2πf). Radial:
+     * S_r(f) = 2πf S(f), ∫_0^∞ S_r df = h_rms², growing by one power: S_r ∝ f^(2D-7). */
+    double *f = map_alloc(r.n), *Sr = map_alloc(r.n), *Sr_err = map_alloc(r.n);
+    for (size_t b = 0; b < r.n; b++) {
+        f[b] = r.k[b] / (2 * M_PI);
+        Sr[b] = 2 * M_PI * f[b] * 4 * M_PI * M_PI * r.P[b];
+        Sr_err[b] = Sr[b] * r.P_err[b] / r.P[b];
+    }
+    ljgap_psd t; /* ∫ S_r df by the same log-log segments: a table of S_r(f)/(2π f) */
+    double *g = map_alloc(r.n), *gk = map_alloc(r.n), var_f, var_k;
+    for (size_t b = 0; b < r.n; b++)
+        gk[b] = f[b], g[b] = Sr[b] / (2 * M_PI * f[b]);
+    assert_int_equal(ljgap_psd_table(&t, gk, g, r.n, 0, 0), LJGAP_OK);
+    var_f = t.m0;
+    ljgap_psd_free(&t);
+    assert_int_equal(ljgap_psd_table(&t, r.k, r.P, r.n, 0, 0), LJGAP_OK);
+    var_k = t.m0;
+    ljgap_psd_free(&t);
+    near(var_f / var_k, 1, 1e-12, "∫ S_r df = 2π ∫ k P dk");
+    /* the exponent: a log-log slope through the bins, weighted like the core's fit */
+    double Sw = 0, Sx = 0, Sy = 0, Sxx = 0, Sxy = 0;
+    for (size_t b = 0; b < r.n; b++) {
+        double w = Sr[b] * Sr[b] / (Sr_err[b] * Sr_err[b]), x = log(f[b]), y = log(Sr[b]);
+        Sw += w, Sx += w * x, Sy += w * y, Sxx += w * x * x, Sxy += w * x * y;
+    }
+    double slope = (Sw * Sxy - Sx * Sy) / (Sw * Sxx - Sx * Sx);
+    near(slope, 2 * D - 7, 0.02, "S_r ∝ f^(2D-7)");
+
+    /* Profiles: ST's power_spectrum_from_profile C1D(q) = |dx FFT(row)|²/Lx, h_rms² =
+     * (1/2π) ∫ C1D dq over ±q: C1D = 2π PP. A one-sided 1/λ profile PSD G(f), ∫_0^∞ G df =
+     * h_rms², is G = 4π PP(2πf). Row 0 through the core (PP), and by those definitions. */
+    ljgap_topo_result pr;
+    compute(h, n, 1, DX, 1, &pr);
+    double *row = map_alloc(n);
+    fftw_complex *cr = fftw_alloc_complex(nxc);
+    assert_non_null(cr);
+    memcpy(row, h, n * sizeof *row);
+    p = fftw_plan_dft_r2c_1d((int)n, row, cr, FFTW_ESTIMATE);
+    fftw_execute(p);
+    fftw_destroy_plan(p);
+    double sum1 = 0, sumG = 0, ss = 0, mu = 0;
+    for (size_t i = 0; i < n; i++)
+        mu += h[i] / (double)n;
+    for (size_t i = 0; i < n; i++)
+        ss += (h[i] - mu) * (h[i] - mu);
+    for (size_t i = 1; i < nxc; i++) {
+        double z2 = cr[i][0] * cr[i][0] + cr[i][1] * cr[i][1], mult = 2 * i == n ? 1 : 2;
+        double C1 = DX * DX * z2 / L, PP = C1 / (2 * M_PI), G = 4 * M_PI * PP * (mult / 2);
+        sum1 += mult * C1 * dq / (2 * M_PI);
+        sumG += G * dq / (2 * M_PI); /* df = dq/2π */
+    }
+    near(sum1, ss / (double)n, 1e-10 * ss / (double)n, "ST profile: (1/2π)∫C1D dq = h_rms²");
+    near(sumG, ss / (double)n, 1e-10 * ss / (double)n, "one-sided G: ∫_0^∞ G df = h_rms²");
+    /* and the core's PP bins integrate the same way: Σ PP Δk over the bins = the profile's h²
+     * (to the bins' curvature correction, well under 1 %) */
+    double sPP = 0;
+    for (size_t b = 0; b < pr.n; b++)
+        sPP += pr.PP[b] * 2 * pr.modes[b] * dq; /* periodic: modes = half the ±k count */
+    near(sPP, ss / (double)n, 0.01 * ss / (double)n, "Σ PP Δk = h_rms² of the row");
+    printf("# conversions: ST C = (2π)²P to %.1e, radial 1/λ slope %.4f (2D-7 = %.2f)\n", worst,
+           slope, 2 * D - 7);
+    free(row);
+    fftw_free(cr);
+    ljgap_topo_result_free(&pr);
+    free(f);
+    free(Sr);
+    free(Sr_err);
+    free(g);
+    free(gk);
+    fftw_free(c);
+    ljgap_topo_result_free(&r);
+    free(a);
+    free(h);
+}
+
+/* ---- bad maps ---- */
+
+static void bad_maps(void **state)
+{
+    double h[32 * 32];
+    ljgap_topo_result r;
+    ljgap_warnings w = {0};
+    ljgap_topo_grid g = {32, 32, 1e-9, 1e-9, 0};
+    unsigned long x = 12345; /* a random walk along each row: PP ∝ k^-2 */
+    for (size_t i = 0; i < 32 * 32; i++) {
+        x = x * 6364136223846793005UL + 1442695040888963407UL;
+        h[i] = (i % 32 ? h[i - 1] : 0) + 1e-10 * ((double)(x >> 11) / 9007199254740992.0 - 0.5);
+    }
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_OK);
+    ljgap_topo_result_free(&r);
+    g.nx = 15, g.ny = 32; /* too few columns */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    g.nx = 32, g.ny = 1; /* a profile of 32 is fine */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_OK);
+    ljgap_topo_result_free(&r);
+    g.nx = 15; /* a profile of 15 is not */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    g.nx = 32, g.ny = 32, g.dx = 0;
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    g.dx = 1e-9, g.dy = -1;
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    g.dy = 1e-9;
+    h[77] = NAN;
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    for (size_t i = 0; i < 32 * 32; i++)
+        h[i] = 3.7e-7; /* all equal */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    for (size_t i = 0; i < 32 * 32; i++)
+        h[i] = 1e-6 + 2e-9 * (double)(i % 32) - 5e-9 * (double)(i / 32); /* a plane */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_EINVAL);
+    g.periodic = 1; /* periodic: only the mean goes, the plane is the signal */
+    assert_int_equal(ljgap_topo_compute(h, &g, NULL, &r, &w), LJGAP_OK);
+    ljgap_topo_result_free(&r);
+    assert_true(w.n >= 4);
+    ljgap_topo_result_free(NULL);
+}
+
+/* ljgap_topo_table: interpolation at k_from, all bins below the first, too few beyond. */
+static void table_from(void **state)
+{
+    double k[] = {1, 2, 4, 8}, P[] = {1, 0.125, 1.0 / 64, 1.0 / 512}, one = 1;
+    ljgap_topo_result r = {.n = 4, .k = k, .P = P};
+    double *tk, *tP;
+    size_t m;
+    (void)one;
+    assert_int_equal(ljgap_topo_table(&r, 0.5, &tk, &tP, &m), LJGAP_OK);
+    assert_int_equal(m, 4);
+    free(tk), free(tP);
+    assert_int_equal(ljgap_topo_table(&r, 3, &tk, &tP, &m), LJGAP_OK);
+    assert_int_equal(m, 3);
+    near(tk[0], 3, 0, "k_from");
+    near(tP[0], pow(3, -3), 1e-14, "log-log interpolation");
+    near(tk[1], 4, 0, "next bin");
+    free(tk), free(tP);
+    assert_int_equal(ljgap_topo_table(&r, 4, &tk, &tP, &m), LJGAP_OK);
+    assert_int_equal(m, 2);
+    near(tP[0], 1.0 / 64, 0, "k_from on a bin");
+    free(tk), free(tP);
+    assert_int_equal(ljgap_topo_table(&r, 8, &tk, &tP, &m), LJGAP_EINVAL);
+    assert_null(tk);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(periodic_power_law),
+        cmocka_unit_test(fit_band_option),
+        cmocka_unit_test(nonperiodic_crop),
+        cmocka_unit_test(honest_errors_periodic),
+        cmocka_unit_test(honest_errors_windowed),
+        cmocka_unit_test(abel_factor),
+        cmocka_unit_test(profiles_rows),
+        cmocka_unit_test(profiles_columns),
+        cmocka_unit_test(profiles_windowed),
+        cmocka_unit_test(conversions),
+        cmocka_unit_test(bad_maps),
+        cmocka_unit_test(table_from),
+    };
+    gsl_set_error_handler_off();
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
