@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "ljgap.h"
 
+#include <gsl/gsl_errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -25,6 +26,11 @@ const char *ljgap_strerror(int status)
     default:
         return "unknown status";
     }
+}
+
+void ljgap_init(void)
+{
+    gsl_set_error_handler_off();
 }
 
 void ljgap_warn(ljgap_warnings *w, const char *fmt, ...)

@@ -2,14 +2,23 @@
  *
  * The core computes, for a rough surface given by its power spectral density (PSD), the
  * statistics of the local gap when the surfaces interact through the integrated
- * Lennard-Jones law, following the paper in shared/seed (equation numbers (N) are the
- * paper's) and shared/docs/theory.md. Everything here is dimensionless (theory.md §1):
- * gaps in units of epsilon, wavenumbers in units of 1/chi, tractions in units of sigma0,
- * energies in units of the flat-surface work of separation.
+ * Lennard-Jones law: the Persson-type theory of the gap PDF with the Lennard-Jones law
+ * (equation numbers (N) are the paper's; docs/theory.md restates the model and its numerics).
+ * Everything here is dimensionless (docs/theory.md §1): gaps in units of epsilon, wavenumbers
+ * in units of 1/chi, tractions in units of sigma0, energies in units of the flat-surface work
+ * of separation.
  *
  * The core knows nothing of HTTP or JSON. Every function returns an int status
  * (LJGAP_OK or an LJGAP_E* code) and writes results through out-pointers; every computed
  * quantity comes with an estimated absolute error (ljgap_est). Callers own memory.
+ *
+ * As a library (make install; pkg-config --cflags --libs ljgap): call ljgap_init() once at
+ * start-up, then for example
+ *   ljgap_psd psd; ljgap_opts o; ljgap_summary s; ljgap_warnings w = {0};
+ *   ljgap_psd_power(&psd, 2.5, 1, INFINITY, LJGAP_LEVEL_M0, 0.5);
+ *   ljgap_opts_default(&o);
+ *   if (ljgap_traction(&psd, &o, NULL, 0, NULL, &s, &w) == LJGAP_OK)
+ *       printf("%g ± %g\n", s.dgamma_eff.value, s.dgamma_eff.err);
  */
 #ifndef LJGAP_H
 #define LJGAP_H
@@ -32,6 +41,10 @@ enum {
     LJGAP_ECANCEL = 5, /* cancelled by the caller */
 };
 const char *ljgap_strerror(int status);
+
+/* Once at start-up, before any thread calls the core: turns off GSL's error handler, whose
+ * default aborts the process on conditions the core detects and reports as a status itself. */
+void ljgap_init(void);
 
 /* ---- warnings attached to a result ---- */
 #define LJGAP_MAX_WARN 8

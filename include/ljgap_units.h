@@ -4,8 +4,11 @@
  * E*, flat-surface work of adhesion Δγ, Lennard-Jones length ε) fixes the scales:
  *   χ = 3ε²E* /(16Δγ)   (length, m)         k̃ = χk,  g̃ = g/ε
  *   σ0 = 16Δγ/(9√3ε)   (stress, Pa, eq. 9)  P̃S(k̃) = PS(k)/(ε²χ²)
- * PSD convention: k angular, m0 = 2π∫k PS(k) dk = ∫∫PS d²k (isotropic 2-D PSD, (22));
- * SurfaceTopography's C(q) and the 1/λ tools' S(f) are (2π)² PS (docs/topography.md).
+ * PSD convention: k is the angular wavenumber (2π/wavelength, rad/m) and the isotropic 2-D PSD
+ * is normalised so that ∫∫PS d²k = 2π∫k PS(k) dk = m0 = h_rms² ((22); Persson's C(q)).
+ * SurfaceTopography/contact.engineering's C(q) at the same q is (2π)² PS; tools on 1/λ
+ * wavenumbers f = k/2π with ∫∫S d²f = h_rms² have S(f) = (2π)² PS(2πf) (docs/theory.md §7;
+ * docs/topography.md for height maps).
  * Conversion functions are pure arithmetic; they know nothing of JSON.
  */
 #ifndef LJGAP_UNITS_H

@@ -1,4 +1,5 @@
 # bench.mk -- the error-against-time and stability benchmarks (bench/errtime.sh) plot with
-# gnuplot (PNG through the cairo terminal of gnuplot-nox).
-DEBS += gnuplot-nox
-CMDS += gnuplot:gnuplot-nox
+# gnuplot (PNG through the cairo terminal of gnuplot-nox); bench/run.sh counts instructions with
+# valgrind's callgrind.
+BENCH_DEBS += gnuplot-nox
+BENCH_CMDS += gnuplot:gnuplot-nox valgrind:valgrind

@@ -5,9 +5,10 @@
 #                              $(BUILD)/fuzz/corpus, crashes to $(BUILD)/fuzz/artifacts/)
 #   make test                  builds $(BUILD)/fuzz/replay with the normal compiler (no fuzzer
 #                              runtime needed) and tests/fuzz/run.sh replays the corpus
-# clang's libFuzzer runtime is Debian's libclang-rt-14-dev.
-DEBS += clang libclang-rt-14-dev
-CMDS += clang:clang
+# clang's libFuzzer runtime is Debian's libclang-rt-14-dev: make fuzz installs both; make test
+# does not need them.
+FUZZ_DEBS += clang libclang-rt-14-dev
+FUZZ_CMDS += clang:clang
 
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
@@ -22,7 +23,7 @@ FUZZ_OBJ := $(FUZZ_SRC:%.c=$(FUZZ_DIR)/obj/%.o)
 TEST_PREP += $(FUZZ_REPLAY)
 
 .PHONY: fuzz
-fuzz: check-deps
+fuzz: check-deps-fuzz
 	@$(MAKE) --no-print-directory $(FUZZ_BIN)
 	@mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
 	$(FUZZ_BIN) -max_total_time=$(FUZZ_SECONDS) -timeout=10 -max_len=4096 \

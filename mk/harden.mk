@@ -2,10 +2,10 @@
 #   make memcheck   the curl suite and the bad-input catalogue with the daemon under valgrind
 #                   memcheck (tests/memcheck/run.sh; make test runs it too)
 #   make bench      runs bench/load.sh with the other benchmarks: wrk against the daemon
-DEBS += valgrind wrk
-CMDS += valgrind:valgrind wrk:wrk
+TEST_CMDS += valgrind:valgrind
+BENCH_CMDS += wrk:wrk
 
 .PHONY: memcheck
-memcheck: check-deps
+memcheck: check-deps-test
 	@$(MAKE) --no-print-directory all
 	@BUILD=$(BUILD) tests/memcheck/run.sh

@@ -11,11 +11,15 @@
  *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
  *                         a progress bar when it is a terminal (nothing otherwise, so logs and
  *                         pipes stay clean); Ctrl-C cancels the run (a 503 problem, exit 1)
+ *   ljgap --csv NAME ...  the answer as CSV (traction, pdf, sweep, simulations), as
+ *                         POST /v1/NAME with Accept: text/csv gives it
  *
- * The same contract as POST /v1/NAME (shared/docs/api.md): exit status 0 for a 2xx answer,
- * 1 for a problem (whose body is still printed on stdout), 2 when the command line is wrong
- * or the request cannot be read. A thin shell: all the work is in ljgap_handle.
+ * The same contract as POST /v1/NAME (docs/api.md): exit status 0 for a 2xx answer, 1 for a
+ * problem (whose body is still printed on stdout), 2 when the command line is wrong or the
+ * request cannot be read. A thin shell: all the work is in ljgap_handle_call and
+ * ljgap_handle_text. The manual page is man/ljgap.1.
  */
+#include "csv.h"
 #include "handler.h"
 #include "ljgap.h"
 
@@ -30,20 +34,25 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: ljgap NAME [FILE]\n"
-               "       ljgap psd --dx M [--dy M] [--periodic] [--NAME VALUE ...] [FILE]\n"
-               "       ljgap --help | --version\n"
-               "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact,\n"
-               "psd) from FILE or standard input and prints the JSON answer on standard output.\n"
-               "With options, psd reads a height matrix in text instead (one row a line, heights\n"
-               "in m separated by spaces or commas, '#' comments); the options are the query\n"
-               "parameters of POST /v1/psd: dx, dy (m, default dx), periodic, and a material's\n"
-               "E_star (or E1, nu1, E2, nu2), dgamma, epsilon.\n"
-               "NAME simulations runs one numerical-model job in the foreground and prints its\n"
-               "result; a progress bar goes to standard error when it is a terminal, and Ctrl-C\n"
-               "cancels the run.\n"
-               "Exit status: 0 for a 2xx answer, 1 for a problem answer, 2 for a usage or\n"
-               "read error. See shared/docs/api.md for the fields.\n");
+    fprintf(f,
+            "usage: ljgap [--csv] NAME [FILE]\n"
+            "       ljgap psd --dx M [--dy M] [--periodic] [--NAME VALUE ...] [FILE]\n"
+            "       ljgap --help | --version\n"
+            "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact,\n"
+            "psd) from FILE or standard input and prints the JSON answer on standard output.\n"
+            "With options, psd reads a height matrix in text instead (one row a line, heights\n"
+            "in m separated by spaces or commas, '#' comments); the options are the query\n"
+            "parameters of POST /v1/psd: dx, dy (m, default dx), periodic, and a material's\n"
+            "E_star (or E1, nu1, E2, nu2), dgamma, epsilon.\n"
+            "NAME simulations runs one numerical-model job in the foreground and prints its\n"
+            "result; a progress bar goes to standard error when it is a terminal, and Ctrl-C\n"
+            "cancels the run.\n"
+            "  --csv      print the answer as CSV (traction, pdf, sweep, simulations); problems\n"
+            "             stay JSON\n"
+            "  --help     this text\n"
+            "  --version  the program's version\n"
+            "Exit status: 0 for a 2xx answer, 1 for a problem answer, 2 for a usage or\n"
+            "read error. The fields are in ljgap(1) and docs/api.md.\n");
 }
 
 /* Reads all of f into a malloc'd, NUL-terminated buffer; NULL on error (errno set). */
@@ -159,7 +168,8 @@ int main(int argc, char **argv)
     ljgap_param *params = NULL;
     size_t len = 0;
     ljgap_reply rep = {0};
-    int rc = 2, nparams = -1;
+    int rc = 2, nparams = -1, csv = 0;
+    ljgap_call call = {0};
     gsl_set_error_handler_off();
     if (argc == 2 && strcmp(argv[1], "--help") == 0) {
         usage(stdout);
@@ -168,6 +178,12 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "--version") == 0) {
         printf("ljgap %s\n", LJGAP_VERSION);
         return 0;
+    }
+    if (argc > 1 && strcmp(argv[1], "--csv") == 0) {
+        csv = 1;
+        call.accept = "text/csv";
+        argv++;
+        argc--;
     }
     if (argc < 2 || argv[1][0] == '-') {
         usage(stderr);
@@ -197,13 +213,17 @@ int main(int argc, char **argv)
         fprintf(stderr, "ljgap: cannot read the request: %s\n", strerror(errno));
         goto end;
     }
-    if (nparams >= 0)
-        ljgap_handle_text(argv[1], params, (size_t)nparams, body, len, NULL, &rep);
-    else if (strcmp(argv[1], "simulations") == 0)
+    if (nparams >= 0) {
+        ljgap_handle_text(argv[1], params, (size_t)nparams, body, len, &call, &rep);
+    } else if (strcmp(argv[1], "simulations") == 0) {
         run_simulation(body, len, &rep);
-    else
-        ljgap_handle(argv[1], body, len, &rep);
-    if (fwrite(rep.body, 1, rep.len, stdout) != rep.len || putchar('\n') == EOF ||
+        if (csv) ljgap_csv_reply(argv[1], &rep);
+    } else {
+        ljgap_handle_call(argv[1], body, len, &call, &rep);
+    }
+    /* a CSV body ends in its own newline; a JSON one gets one */
+    if (fwrite(rep.body, 1, rep.len, stdout) != rep.len ||
+        (!(rep.len && rep.body[rep.len - 1] == '\n') && putchar('\n') == EOF) ||
         fflush(stdout) != 0) {
         fprintf(stderr, "ljgap: cannot write the answer: %s\n", strerror(errno));
         goto end;

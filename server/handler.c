@@ -1,10 +1,12 @@
-/* handler.c -- the request handler: endpoint name + JSON body -> status + JSON body.
+/* handler.c -- the request handler: endpoint name + JSON body + Accept -> status + body.
  *
- * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle. It parses the
+ * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle_call. It parses the
  * body with cJSON, validates it (request.c: every bad field reported with a JSON pointer),
  * builds the PSD, calls the core (include/ljgap.h) and serialises the answer exactly as
- * shared/docs/api.md fixes it. It is a pure function of its arguments and of the limits set
- * at start-up, so it is thread-safe: nothing else here is mutable and shared.
+ * docs/api.md fixes it: as JSON, or for traction, pdf and sweep as CSV when the Accept header
+ * prefers it (accept.c decides, csv.c writes the JSON answer out as a table). It is a pure
+ * function of its arguments and of the limits set at start-up, so it is thread-safe: nothing
+ * else here is mutable and shared.
  *
  * Two rules hold for every answer:
  *   - no NaN or Inf goes out: put_num writes null instead and says why in meta.warnings;
@@ -21,30 +23,31 @@
  * takes minutes. ljgap_sim_request_parse validates like every endpoint (same problems) and
  * builds the PSD; ljgap_sim_request_run runs it under the caller's cancel flag, progress
  * callback and time cap, and serialises the result. The daemon runs them as background jobs
- * (jobs.c), the CLI in the foreground.
+ * (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll of a job, with
+ * a finished job's result as CSV when Accept asks for it.
  *
- * Problem types: the "type" member of every application/problem+json answer
- * (openapi.json lists the same set; keep them in step):
- *   https://ljgap.example/problems/malformed-json  400  the body is not one valid JSON value
- *   https://ljgap.example/problems/not-found       404  no such endpoint
- *   https://ljgap.example/problems/validation      422  valid JSON, bad values: errors[] has
- *                                                       one {pointer, detail} per bad field
- *   https://ljgap.example/problems/outside-model   422  the core found the input outside the
- *                                                       model's domain (LJGAP_EINVAL),
- *                                                       pointer "/psd"
- *   https://ljgap.example/problems/cap-exceeded    422  the computation needs more than the
- *                                                       server's caps (LJGAP_ECAP)
- *   https://ljgap.example/problems/no-answer       422  no finite answer could be formed
- *                                                       (LJGAP_EFAIL)
- *   https://ljgap.example/problems/unavailable     503  the computation was cancelled
- *                                                       (server shutting down, a simulation
- *                                                       cancelled; LJGAP_ECANCEL)
- *   https://ljgap.example/problems/out-of-memory   500  an allocation failed (LJGAP_ENOMEM)
+ * Problem types: the "type" member of every application/problem+json answer is /problems/SLUG,
+ * a page the daemon serves; problems.c holds the status, title and text of each (openapi.json
+ * lists the same set; a unit test keeps them in step). The handler answers these:
+ *   malformed-json  400  the body is not one valid JSON value
+ *   not-found       404  no such endpoint
+ *   not-acceptable  406  the Accept header allows no form this answer has
+ *   validation      422  valid JSON, bad values: errors[] has one {pointer, detail} per bad field
+ *   outside-model   422  the core found the input outside the model's domain (LJGAP_EINVAL),
+ *                        pointer "/psd"
+ *   cap-exceeded    422  the computation needs more than the server's caps (LJGAP_ECAP)
+ *   no-answer       422  no finite answer could be formed (LJGAP_EFAIL)
+ *   unavailable     503  the computation was cancelled (server shutting down, a simulation
+ *                        cancelled; LJGAP_ECANCEL)
+ *   out-of-memory   500  an allocation failed (LJGAP_ENOMEM)
  * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
  */
 #include "handler.h"
+#include "accept.h"
+#include "csv.h"
 #include "ljgap_sim.h"
 #include "ljgap_topo.h"
+#include "problems.h"
 #include "request.h"
 
 #include <math.h>
@@ -59,27 +62,19 @@
 #define CT_PROBLEM "application/problem+json"
 #define DETAIL_LEN (LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400)
 
-typedef struct {
-    int status;
-    const char *type;
-    const char *title;
-} problem_kind;
-
-#define PROBLEM(s, slug, title)                                                                    \
-    {                                                                                              \
-        s, "https://ljgap.example/problems/" slug, title                                           \
-    }
-static const problem_kind P_MALFORMED = PROBLEM(400, "malformed-json", "Malformed JSON");
-static const problem_kind P_NOT_FOUND = PROBLEM(404, "not-found", "No such endpoint");
-static const problem_kind P_VALIDATION = PROBLEM(422, "validation", "Invalid request");
-static const problem_kind P_OUTSIDE = PROBLEM(422, "outside-model", "Outside the model");
-static const problem_kind P_CAP = PROBLEM(422, "cap-exceeded", "Exceeds the server's caps");
-static const problem_kind P_NO_ANSWER = PROBLEM(422, "no-answer", "No finite answer");
-static const problem_kind P_UNAVAILABLE = PROBLEM(503, "unavailable", "Computation cancelled");
-static const problem_kind P_OOM = PROBLEM(500, "out-of-memory", "Out of memory");
+/* Problem types (problems.c has the status, title and page of each). */
+#define P_MALFORMED "malformed-json"
+#define P_NOT_FOUND "not-found"
+#define P_NOT_ACCEPTABLE "not-acceptable"
+#define P_VALIDATION "validation"
+#define P_OUTSIDE "outside-model"
+#define P_CAP "cap-exceeded"
+#define P_NO_ANSWER "no-answer"
+#define P_UNAVAILABLE "unavailable"
+#define P_OOM "out-of-memory"
 
 /* Sent when not even a problem can be allocated; never freed (see ljgap_reply_free). */
-static char oom_body[] = "{\"type\":\"https://ljgap.example/problems/out-of-memory\","
+static char oom_body[] = "{\"type\":\"" LJGAP_PROBLEM_BASE "out-of-memory\","
                          "\"title\":\"Out of memory\",\"status\":500,"
                          "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
 
@@ -120,7 +115,7 @@ typedef struct {
 
 static void reply_oom(ljgap_reply *out)
 {
-    out->status = P_OOM.status;
+    out->status = 500;
     out->body = oom_body;
     out->len = strlen(oom_body);
     out->content_type = CT_PROBLEM;
@@ -140,13 +135,16 @@ static void reply_json(ljgap_reply *out, int status, const char *ctype, const cJ
     out->content_type = ctype;
 }
 
-/* A problem answer; takes errors (an array, or NULL for an empty one). */
-static void reply_problem(ljgap_reply *out, const problem_kind *k, const char *detail,
-                          cJSON *errors)
+/* A problem answer of type /problems/slug (status and title from problems.c); takes errors
+ * (an array, or NULL for an empty one). */
+static void reply_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors)
 {
+    const ljgap_problem_doc *k = ljgap_problem_find(slug);
     cJSON *p = cJSON_CreateObject();
+    char type[80];
+    snprintf(type, sizeof type, LJGAP_PROBLEM_BASE "%s", slug);
     if (!errors) errors = cJSON_CreateArray();
-    if (!p || !errors || !cJSON_AddStringToObject(p, "type", k->type) ||
+    if (!k || !p || !errors || !cJSON_AddStringToObject(p, "type", type) ||
         !cJSON_AddStringToObject(p, "title", k->title) ||
         !cJSON_AddNumberToObject(p, "status", k->status) ||
         !cJSON_AddStringToObject(p, "detail", detail) ||
@@ -158,6 +156,12 @@ static void reply_problem(ljgap_reply *out, const problem_kind *k, const char *d
     reply_json(out, k->status, CT_PROBLEM, p);
 end:
     cJSON_Delete(p);
+}
+
+void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail)
+{
+    memset(out, 0, sizeof *out);
+    reply_problem(out, slug, detail, NULL);
 }
 
 void ljgap_reply_free(ljgap_reply *r)
@@ -809,7 +813,7 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
             reply_oom(out);
             return;
         }
-        reply_problem(out, &P_OUTSIDE, detail, errors);
+        reply_problem(out, P_OUTSIDE, detail, errors);
         return;
     case LJGAP_ECAP:
         snprintf(head, sizeof head,
@@ -818,15 +822,15 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
                  "point-steps); ask for a larger tol or fewer points%s",
                  limits.max_seconds, j->rq.opts.max_work, j->fail);
         join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, &P_CAP, detail, NULL);
+        reply_problem(out, P_CAP, detail, NULL);
         return;
     case LJGAP_EFAIL:
         snprintf(head, sizeof head, "no finite answer could be formed%s", j->fail);
         join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, &P_NO_ANSWER, detail, NULL);
+        reply_problem(out, P_NO_ANSWER, detail, NULL);
         return;
     case LJGAP_ECANCEL:
-        reply_problem(out, &P_UNAVAILABLE,
+        reply_problem(out, P_UNAVAILABLE,
                       "the computation was cancelled (the server is "
                       "shutting down); try again",
                       NULL);
@@ -876,7 +880,7 @@ static void reply_invalid(ljgap_reply *out, ljgap_verr *ve)
     else
         snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve->n,
                  ve->n == 1 ? "" : "s");
-    reply_problem(out, &P_VALIDATION, detail, ve->errors);
+    reply_problem(out, P_VALIDATION, detail, ve->errors);
     ve->errors = NULL; /* reply_problem took it */
 }
 
@@ -894,7 +898,7 @@ static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljg
                  "the body is not one valid JSON value in UTF-8 (error at byte "
                  "%zu of %zu)",
                  where, len);
-        reply_problem(out, &P_MALFORMED, detail, NULL);
+        reply_problem(out, P_MALFORMED, detail, NULL);
         goto end;
     }
     if (!(ve.errors = cJSON_CreateArray())) {
@@ -912,8 +916,34 @@ end:
     return ok;
 }
 
-/* Runs a validated request and answers it (j->rq is the caller's to free). */
-static void run_job(job *j, int (*run)(job *), const ljgap_call *call, double t0, ljgap_reply *out)
+/* The media types an answer can take: JSON always, CSV where csv.h has a form for it. */
+static const char *const forms[] = {CT_JSON, "text/csv"};
+
+/* Which form the Accept header asks for: 0 JSON, 1 CSV (only when csv is nonzero), or -1 with
+ * the 406 problem in *out. */
+static int negotiate(const char *accept, int csv, ljgap_reply *out)
+{
+    int k = ljgap_accept_pick(accept, forms, csv ? 2 : 1);
+    if (k < 0)
+        reply_problem(out, P_NOT_ACCEPTABLE,
+                      csv ? "the Accept header allows neither application/json nor text/csv, "
+                            "the forms this answer has; ask for one of them or send no Accept"
+                          : "the Accept header does not allow application/json, the one form "
+                            "this answer has; ask for it or send no Accept",
+                      NULL);
+    return k;
+}
+
+/* The form of endpoint's answer that call's Accept header asks for (negotiate). */
+static int form_of(const char *endpoint, const ljgap_call *call, ljgap_reply *out)
+{
+    return negotiate(call ? call->accept : NULL, ljgap_csv_offers(endpoint), out);
+}
+
+/* Runs a validated request and answers it in form (0 JSON, 1 the CSV of endpoint; j->rq is
+ * the caller's to free). */
+static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+                    const ljgap_call *call, double t0, ljgap_reply *out)
 {
     int st;
     j->deadline = t0 + limits.max_seconds;
@@ -927,8 +957,10 @@ static void run_job(job *j, int (*run)(job *), const ljgap_call *call, double t0
     if (!st && j->oom) st = LJGAP_ENOMEM;
     if (st)
         reply_status(out, st, j);
-    else
+    else if (form == 0)
         reply_json(out, 200, CT_JSON, j->ans);
+    else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
+        reply_oom(out);
     cJSON_Delete(j->ans);
     j->ans = NULL;
 }
@@ -945,6 +977,7 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
     const route *r = route_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
+    int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
     if (!r) {
@@ -954,10 +987,11 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
                  "traction, pdf, sweep, contact and psd",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        reply_problem(out, &P_NOT_FOUND, detail, NULL);
+        reply_problem(out, P_NOT_FOUND, detail, NULL);
         goto end;
     }
-    if (validate(r->ep, body, len, &j, out)) run_job(&j, r->run, call, t0, out);
+    if ((form = form_of(r->name, call, out)) < 0) goto end;
+    if (validate(r->ep, body, len, &j, out)) run_job(&j, r->run, r->name, form, call, t0, out);
 end:
     ljgap_request_free(&j.rq);
 }
@@ -976,6 +1010,7 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
     cJSON *query = NULL;
     char detail[DETAIL_LEN];
     job j;
+    int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
     if (!ljgap_handler_has_text(endpoint)) {
@@ -984,9 +1019,10 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
                  "text/csv; the other endpoints take JSON",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        reply_problem(out, &P_NOT_FOUND, detail, NULL);
+        reply_problem(out, P_NOT_FOUND, detail, NULL);
         return;
     }
+    if ((form = form_of(endpoint, call, out)) < 0) return;
     if (!(ve.errors = cJSON_CreateArray())) {
         reply_oom(out);
         return;
@@ -997,7 +1033,7 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
     if (ve.n || ve.oom)
         reply_invalid(out, &ve);
     else
-        run_job(&j, run_psd, call, t0, out);
+        run_job(&j, run_psd, endpoint, form, call, t0, out);
     cJSON_Delete(query);
     cJSON_Delete(ve.errors);
     free(heights.h);
@@ -1033,7 +1069,7 @@ ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_r
     if (ve.oom)
         reply_oom(out);
     else
-        reply_problem(out, &P_VALIDATION, "1 problem in the request: see errors", ve.errors);
+        reply_problem(out, P_VALIDATION, "1 problem in the request: see errors", ve.errors);
     ve.errors = NULL;
 fail:
     cJSON_Delete(ve.errors);
@@ -1099,9 +1135,9 @@ void ljgap_sim_request_run(ljgap_sim_request *sr, const ljgap_sim_control *ctl, 
                  "ask for a smaller n, fewer realizations or fewer mean gaps",
                  o.max_seconds);
         join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, &P_CAP, detail, NULL);
+        reply_problem(out, P_CAP, detail, NULL);
     } else if (st == LJGAP_ECANCEL) {
-        reply_problem(out, &P_UNAVAILABLE,
+        reply_problem(out, P_UNAVAILABLE,
                       "the simulation was cancelled before it finished (DELETE, Ctrl-C, or the "
                       "server shutting down)",
                       NULL);
@@ -1119,4 +1155,47 @@ void ljgap_sim_request_free(ljgap_sim_request *sr)
     ljgap_psd_free(&sr->psd);
     ljgap_request_free(&sr->j.rq);
     free(sr);
+}
+
+void ljgap_sim_status_answer(const char *status_json, int http_status, const char *accept,
+                             ljgap_reply *out)
+{
+    cJSON *doc = NULL;
+    const char *state;
+    char detail[200];
+    int form;
+    memset(out, 0, sizeof *out);
+    if ((form = negotiate(accept, 1, out)) < 0) return;
+    if (form == 1) {
+        doc = cJSON_Parse(status_json);
+        if (!doc) {
+            reply_oom(out);
+            return;
+        }
+        state = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(doc, "status"));
+        if (state && strcmp(state, "done") == 0) {
+            if (ljgap_csv_render("simulations", cJSON_GetObjectItemCaseSensitive(doc, "result"), 0,
+                                 out) != 0)
+                reply_oom(out);
+            goto end;
+        }
+        if (ljgap_accept_pick(accept, forms, 1) < 0) { /* only CSV will do */
+            snprintf(detail, sizeof detail,
+                     "the job is %.20s: its result is there as text/csv once it is done; until "
+                     "then ask for application/json too (Accept: text/csv, "
+                     "application/json;q=0.5)",
+                     state ? state : "not done");
+            reply_problem(out, P_NOT_ACCEPTABLE, detail, NULL);
+            goto end;
+        }
+    }
+    if (!(out->body = strdup(status_json))) {
+        reply_oom(out);
+        goto end;
+    }
+    out->status = http_status;
+    out->len = strlen(out->body);
+    out->content_type = CT_JSON;
+end:
+    cJSON_Delete(doc);
 }

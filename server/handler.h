@@ -1,8 +1,9 @@
 /* handler.h -- the one request handler behind the CLI, the HTTP daemon and the fuzzer.
  *
- * A pure function: endpoint name + JSON request body -> HTTP status + JSON body
- * (shared/docs/api.md). It validates (422 problem+json with a JSON pointer per bad field),
- * converts to core calls, and serialises results. It never touches sockets or files.
+ * A pure function: endpoint name + JSON request body (+ the Accept header) -> HTTP status +
+ * body (the contract is docs/api.md). It validates (422 problem+json with a JSON pointer per
+ * bad field), converts to core calls, and serialises results as JSON or, where the endpoint
+ * has one and Accept asks for it, as CSV (csv.h). It never touches sockets or files.
  */
 #ifndef LJGAP_HANDLER_H
 #define LJGAP_HANDLER_H
@@ -11,9 +12,10 @@
 
 typedef struct {
     int status;               /* HTTP status code */
-    char *body;               /* malloc'd, NUL-terminated JSON; free with ljgap_reply_free */
+    char *body;               /* malloc'd, NUL-terminated; free with ljgap_reply_free */
     size_t len;               /* strlen(body) */
-    const char *content_type; /* "application/json" or "application/problem+json" */
+    const char *content_type; /* "application/json", "application/problem+json", text/csv
+                               * (csv.h) or text/html (problems.h) */
 } ljgap_reply;
 
 /* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
@@ -36,19 +38,28 @@ void ljgap_handler_set_limits(const ljgap_limits *l);
 
 /* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
- * memory runs out). Thread-safe. */
+ * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
 
 /* How one call is driven, beyond the server-wide limits. Everything may be zero. */
 typedef struct {
     const volatile int *cancel; /* nonzero stops this computation (503 "unavailable" problem);
                                  * NULL: the limits' cancel flag */
+    const char *accept;         /* the request's Accept header, NULL when it has none:
+                                 * traction, pdf and sweep answer text/csv (csv.h) when it
+                                 * prefers that to application/json (accept.h); one that allows
+                                 * no form the endpoint has is a 406 problem, decided before the
+                                 * body is read. Problems are always application/problem+json. */
 } ljgap_call;
 
 /* ljgap_handle with per-call settings (call may be NULL: the same as ljgap_handle). */
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out);
 void ljgap_reply_free(ljgap_reply *r);
+
+/* A problem answer of type /problems/SLUG (problems.h gives its status and title) with this
+ * detail and an empty errors[]. */
+void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail);
 
 /* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
 int ljgap_handler_has(const char *endpoint);
@@ -98,5 +109,13 @@ ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_r
  * sigma_std, m0_realized, elapsed_ms, error, ... and meta), or a problem. */
 void ljgap_sim_request_run(ljgap_sim_request *rq, const ljgap_sim_control *ctl, ljgap_reply *out);
 void ljgap_sim_request_free(ljgap_sim_request *rq); /* NULL is fine */
+
+/* The answer to GET /v1/simulations/ID, given the job's status object (the JSON string of
+ * jobs.h's ljgap_jobs_status) and the HTTP status it goes with (200, or 202 while a cancelled
+ * job is still stopping): that object as application/json, or, when accept prefers text/csv
+ * and the job is done, its result as CSV; 406 when accept allows neither (or only CSV while
+ * the job is not done). */
+void ljgap_sim_status_answer(const char *status_json, int http_status, const char *accept,
+                             ljgap_reply *out);
 
 #endif

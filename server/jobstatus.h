@@ -20,10 +20,10 @@
 #define LJGAP_JOBSTATUS_H
 
 #include "jobstore.h"
+#include "problems.h"
 
 #include <stddef.h>
 
-#define LJGAP_PROBLEM_BASE "https://ljgap.example/problems/" /* as in handler.c */
 
 /* The status object of rec as a malloc'd one-line JSON string; NULL if memory ran out. */
 char *ljgap_job_status_json(const ljgap_job_record *rec);

@@ -1,4 +1,4 @@
-/* request.c -- validation of compute requests (shared/docs/api.md) into ljgap_request.
+/* request.c -- validation of compute requests (docs/api.md) into ljgap_request.
  *
  * Bad input is the caller's: everything the contract rules out is caught here, before the
  * core runs, and reported with a JSON pointer (RFC 6901) and one clear sentence. The walk

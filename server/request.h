@@ -1,4 +1,4 @@
-/* request.h -- a compute request (shared/docs/api.md), validated and in core terms.
+/* request.h -- a compute request (docs/api.md), validated and in core terms.
  *
  * ljgap_request_parse reads a cJSON request body for one endpoint, checks every field
  * against the contract and collects ALL the problems it finds as {"pointer","detail"}

@@ -1,6 +1,6 @@
 /* app.js -- the ljgap page: form -> JSON requests -> plots, readouts and exports.
  *
- * The form is turned into the requests of shared/docs/api.md (traction, pdf, sweep, contact),
+ * The form is turned into the requests of the API (docs/api.md: traction, pdf, sweep, contact),
  * which run one after another (the server has few compute slots; a 503 is retried after its
  * Retry-After). The server is the only validator of values: text that is not a number is sent as
  * it is, and each problem+json error is shown beside the field whose data-ptr names its JSON
@@ -557,6 +557,19 @@
     $("readout-contact").replaceChildren(t, metaLine(ans), ...warnings(ans));
   }
 
+  /* A problem answer of panel's request: beside the fields its pointers name, the rest in the
+   * panel's readout. */
+  function showProblem(panel, status, json) {
+    const loose = placeProblem(json || {}, panel);
+    const ro = $(`readout-${panel}`);
+    ro.replaceChildren(
+      el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`),
+      ...loose.map((t) => el("div", { class: "problem" }, t))
+    );
+    if (panel === "contact") $("card-contact").hidden = false;
+    else if ($(`plot-${panel}`)) LJPlots.clear($(`plot-${panel}`));
+  }
+
   /* ---- running ---- */
 
   let running = false;
@@ -607,14 +620,7 @@
           (byPanel[r.panel] = byPanel[r.panel] || []).push({ ans: res.json, label: r.label, body: r.body });
         } else {
           failed++;
-          const loose = placeProblem(res.json || {}, r.panel);
-          const ro = $(`readout-${r.panel}`);
-          ro.replaceChildren(
-            el("div", { class: "problem" }, `${res.status} ${res.json.title || ""}: ${res.json.detail || ""}`),
-            ...loose.map((t) => el("div", { class: "problem" }, t))
-          );
-          if (r.panel === "contact") $("card-contact").hidden = false;
-          else if ($(`plot-${r.panel}`)) LJPlots.clear($(`plot-${r.panel}`));
+          showProblem(r.panel, res.status, res.json);
         }
         const got = byPanel[r.panel];
         if (got && got.length === reqs.filter((q) => q.panel === r.panel).length) {
@@ -882,6 +888,6 @@
     }
   }
 
-  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor };
+  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem };
   init();
 })();

@@ -1,4 +1,4 @@
-/* jobs.js -- numerical-model jobs (api.md "simulations"): POST /v1/simulations answers 202 with
+/* jobs.js -- numerical-model jobs (docs/api.md "simulations"): POST /v1/simulations answers 202 with
  * {id, status, progress, elapsed_ms}; GET /v1/simulations/ID is polled for progress until the
  * status is done (then "result" holds g_ave[], sigma[], error.sigma[], …), failed or cancelled
  * (then "problem"); DELETE cancels. app.js calls LJJobs.init(api) when /openapi.json lists the
@@ -63,6 +63,13 @@ const LJJobs = (() => {
     $("sim-state").textContent = `job ${s.id.slice(0, 8)}…: ${s.status}, ${Math.round(100 * (s.progress || 0))} %, ${api.fmt(s.elapsed_ms / 1000, 3)} s`;
   }
 
+  /* The submission was answered with a problem: beside the fields, and in the job's line. */
+  function refused(status, json) {
+    const loose = api.placeProblem(json, "jobs");
+    $("sim-state").textContent = `${status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}`;
+    $("sim-state").dataset.status = "refused";
+  }
+
   async function start() {
     if (current) return;
     api.clearErrors();
@@ -72,9 +79,7 @@ const LJJobs = (() => {
     const r = await fetch("/v1/simulations", { method: "POST", headers: { "Content-Type": "application/json" }, body: text });
     const json = await r.json().catch(() => ({}));
     if (r.status !== 202) {
-      const loose = api.placeProblem(json, "jobs");
-      $("sim-state").textContent = `${r.status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}`;
-      $("sim-state").dataset.status = "refused";
+      refused(r.status, json);
       return;
     }
     current = { id: json.id };
@@ -153,5 +158,5 @@ const LJJobs = (() => {
     build();
   }
 
-  return { init };
+  return { init, request, refused };
 })();

@@ -86,6 +86,14 @@ const LJTopo = (() => {
     $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), api.metaLine(a), ...api.warnings(a));
   }
 
+  /* The height map was answered with a problem: beside the fields, and in the readout. */
+  function refused(status, json) {
+    psd = null;
+    const loose = api.placeProblem(json, "topo");
+    $("readout-topo").replaceChildren(api.el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`), ...loose.map((t) => api.el("div", { class: "problem" }, t)));
+    api.setIdle("The height map was refused: see the highlighted fields.", true);
+  }
+
   async function computePsd() {
     const f = $("topo-file").files[0];
     api.clearErrors();
@@ -109,10 +117,7 @@ const LJTopo = (() => {
     }
     p.answers.push(res.json);
     if (res.status !== 200) {
-      psd = null;
-      const loose = api.placeProblem(res.json || {}, "topo");
-      $("readout-topo").replaceChildren(api.el("div", { class: "problem" }, `${res.status} ${res.json.title || ""}: ${res.json.detail || ""}`), ...loose.map((t) => api.el("div", { class: "problem" }, t)));
-      api.setIdle("The height map was refused: see the highlighted fields.", true);
+      refused(res.status, res.json || {});
       return;
     }
     psd = res.json;
@@ -198,5 +203,5 @@ const LJTopo = (() => {
     for (const id of ["topo-k1", "topo-k2"]) $(id).addEventListener("change", () => psd && draw());
   }
 
-  return { init, spectrum };
+  return { init, spectrum, query, refused };
 })();

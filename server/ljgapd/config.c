@@ -25,7 +25,7 @@ static void usage(FILE *f)
         "Listening\n"
         "  --port N              TCP port; 0 picks a free one (default 8080)\n"
         "  --bind ADDR           numeric IPv4/IPv6 address to listen on (default 127.0.0.1)\n"
-        "  --web DIR             serve the page and its assets from DIR (default: none)\n"
+        "  --web DIR             serve the page from DIR instead of the copy compiled in\n"
         "Computations\n"
         "  --compute-slots N     most computations at once (default: number of cores)\n"
         "  --queue N             most computations waiting for a slot (default 64); past it,\n"

@@ -102,6 +102,7 @@ typedef struct {
     int counted;                  /* counted in conns_client_enter (--trust-proxy) */
     int status;                   /* status queued, 0 until then */
     char note[96];                /* extra words for the log line, or "" */
+    const char *accept;           /* its Accept header (compute and job routes), or NULL */
     char *body;                   /* request body received so far (body routes) */
     size_t len;                   /* bytes in body */
     size_t cap;                   /* bytes allocated for body */
@@ -181,7 +182,7 @@ int compute_exists(const char *rest);
  * compute slot, not cached. */
 enum MHD_Result route_psd(struct MHD_Connection *c, request *r);
 
-/* static.c: GET / and the page's files from --web DIR. */
+/* static.c: GET / and the page's files: compiled in, or from --web DIR. */
 enum MHD_Result route_static(struct MHD_Connection *c, request *r);
 int static_exists(const char *rest);
 
@@ -205,6 +206,9 @@ enum MHD_Result respond_busy(struct MHD_Connection *c, request *r, const char *d
 /* 200 with the file open on fd (size bytes); fd is closed with the response. */
 enum MHD_Result respond_file(struct MHD_Connection *c, request *r, int fd, size_t size,
                              const char *ctype);
+/* 200 with static bytes (not copied) and their ETag, or 304 when if_none_match matches it. */
+enum MHD_Result respond_static(struct MHD_Connection *c, request *r, const void *data, size_t len,
+                               const char *ctype, const char *etag, const char *if_none_match);
 /* 413: the request body is over cfg.max_body. */
 enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r);
 

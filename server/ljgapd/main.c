@@ -237,7 +237,8 @@ int main(int argc, char **argv)
             LJGAP_VERSION, cfg->slots, cfg->queue, cfg->queue_wait, cfg->max_seconds,
             cfg->connections, cfg->client_connections,
             cfg->trust_proxy ? ", by X-Forwarded-For" : "", files, cfg->io_threads,
-            cfg->io_threads == 1 ? "" : "s", cfg->jobs.workers, cfg->web ? cfg->web : "(none)");
+            cfg->io_threads == 1 ? "" : "s", cfg->jobs.workers,
+            cfg->web ? cfg->web : "compiled in");
 
     while (sigwait(&sigs, &sig) != 0)
         ;

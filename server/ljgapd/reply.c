@@ -4,17 +4,20 @@
  * X-Request-Id, nosniff, the page's Content-Security-Policy, Connection: close while stopping)
  * and queues it. Routes answer through respond_json, respond_reply, respond_problem,
  * respond_busy and respond_file; none builds a response by hand. Problems written here are the
- * HTTP-level ones (404, 405, 413, 415, 503, 500); the handler writes its own (400, 404, 422)
- * with the same base URI, and openapi.json lists them all.
+ * HTTP-level ones (404, 405, 413, 415, 503, 500); the handler writes its own (400, 404, 406,
+ * 422) with the same base URI, /problems/ (problems.h: each type is a page the daemon serves),
+ * and openapi.json lists them all.
  */
 #include "daemon.h"
+#include "problems.h"
+#include "webfiles.h"
 
 #include <cjson/cJSON.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 
-#define PROBLEM_BASE "https://ljgap.example/problems/" /* as in handler.c */
+#define PROBLEM_BASE LJGAP_PROBLEM_BASE /* a page of this server, as in handler.c */
 
 double seconds_since(const struct timespec *t0)
 {
@@ -121,6 +124,19 @@ enum MHD_Result respond_file(struct MHD_Connection *c, request *r, int fd, size_
     struct MHD_Response *resp = MHD_create_response_from_fd(size, fd);
     if (!resp) close(fd);
     return respond(c, r, MHD_HTTP_OK, resp, ctype);
+}
+
+enum MHD_Result respond_static(struct MHD_Connection *c, request *r, const void *data, size_t len,
+                               const char *ctype, const char *etag, const char *if_none_match)
+{
+    int fresh = ljgap_web_etag_match(if_none_match, etag);
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer(fresh ? 0 : len, (void *)data, MHD_RESPMEM_PERSISTENT);
+    if (resp) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
+    }
+    return respond(c, r, fresh ? MHD_HTTP_NOT_MODIFIED : MHD_HTTP_OK, resp, ctype);
 }
 
 enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r)

@@ -16,12 +16,14 @@
  * restart); 202, with the job's id and its Location, only once the job is committed. Worker
  * threads run the stored requests (jobs.h: --job-workers threads, a queue of --job-queue, 503
  * with Retry-After when full, or with the problem job-store when the store fails).
- * GET /v1/simulations/ID polls it (status, progress, then result or problem), DELETE cancels
- * it (200 once it has ended, 202 while it is still stopping).
+ * GET /v1/simulations/ID polls it (status, progress, then result or problem; a done job's
+ * result as CSV when Accept asks for text/csv), DELETE cancels it (200 once it has ended, 202
+ * while it is still stopping). /problems/TYPE are the pages the problem types point at.
  */
 #include "daemon.h"
 #include "jobstatus.h"
 #include "ljgap.h"
+#include "problems.h"
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_version.h>
@@ -221,12 +223,33 @@ static void sim_job_work(request *r, const volatile int *cancel, work_reply *out
         work_oom(out);
         return;
     }
-    work_json(out, final ? MHD_HTTP_OK : MHD_HTTP_ACCEPTED, status);
+    if (strcmp(r->method, "DELETE") == 0) {
+        work_json(out, final ? MHD_HTTP_OK : MHD_HTTP_ACCEPTED, status);
+        return;
+    }
+    /* JSON, or a done job's result as CSV, as Accept asks (406 when neither will do) */
+    ljgap_sim_status_answer(status, MHD_HTTP_OK, r->accept, &out->rep);
+    free(status);
 }
 
 static enum MHD_Result route_sim_job(struct MHD_Connection *c, request *r)
 {
+    if (!r->task)
+        r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
     return route_offload(c, r, srv.ops, sim_job_work, NULL, 0);
+}
+
+/* GET /problems/TYPE: what a problem type means and how to fix the request; /problems/: all. */
+static int problems_exists(const char *rest)
+{
+    return !strchr(rest, '/');
+}
+
+static enum MHD_Result route_problems(struct MHD_Connection *c, request *r)
+{
+    ljgap_reply rep;
+    ljgap_problem_page(r->url + strlen(LJGAP_PROBLEM_BASE), &rep);
+    return respond_reply(c, r, &rep);
 }
 
 static enum MHD_Result route_not_found(struct MHD_Connection *c, request *r)
@@ -244,6 +267,7 @@ static const struct route routes[] = {
     {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job, 0},
     {"/v1/psd", NULL, "POST", 1, route_psd, LJGAP_TEXT_MAX_BYTES},
     {"/v1/", compute_exists, "POST", 1, route_compute, 0},
+    {LJGAP_PROBLEM_BASE, problems_exists, "GET, HEAD", 0, route_problems, 0},
     {"/", static_exists, "GET, HEAD", 0, route_static, 0},
     {NULL, NULL, NULL, 0, route_not_found, 0},
 };

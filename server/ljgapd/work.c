@@ -180,7 +180,7 @@ end:
 /* On a compute slot: the handler, then the cache. */
 static void compute_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_call call = {cancel};
+    ljgap_call call = {cancel, r->accept};
     const char *endpoint = r->url + strlen("/v1/");
     ljgap_handle_call(endpoint, r->body ? r->body : "", r->len, &call, &out->rep);
     if (out->rep.status >= 200 && out->rep.status < 300 && out->key)
@@ -190,19 +190,22 @@ static void compute_work(request *r, const volatile int *cancel, work_reply *out
 enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
 {
     const char *endpoint = r->url + strlen("/v1/");
-    size_t elen = strlen(endpoint), klen;
+    size_t elen = strlen(endpoint), alen, klen;
     char *key, *hit = NULL;
     size_t hitlen = 0;
     int status = 0;
     enum MHD_Result ret;
 
     if (r->task) return route_offload(c, r, srv.slots, compute_work, NULL, 0);
-    /* the cache key: endpoint, NUL, body bytes */
-    klen = elen + 1 + r->len;
+    /* the cache key: Accept, NUL, endpoint, NUL, body bytes (only JSON answers are stored) */
+    r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+    alen = r->accept ? strlen(r->accept) : 0;
+    klen = alen + 1 + elen + 1 + r->len;
     if (!(key = malloc(klen)))
         return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
-    memcpy(key, endpoint, elen + 1);
-    if (r->len) memcpy(key + elen + 1, r->body, r->len);
+    memcpy(key, r->accept ? r->accept : "", alen + 1);
+    memcpy(key + alen + 1, endpoint, elen + 1);
+    if (r->len) memcpy(key + alen + 1 + elen + 1, r->body, r->len);
     if (http_cache_get(srv.cache, key, klen, &status, &hit, &hitlen) == 1) {
         ret = respond_json(c, r, status, "application/json", hit, hitlen);
         free(hit);
@@ -220,7 +223,7 @@ int compute_exists(const char *rest)
 /* On a compute slot: a text upload (its body can be 64 MiB: no cache). */
 static void psd_text_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_call call = {cancel};
+    ljgap_call call = {cancel, r->accept};
     ljgap_handle_text("psd", r->params, r->nparams, r->body ? r->body : "", r->len, &call,
                       &out->rep);
 }
@@ -228,5 +231,7 @@ static void psd_text_work(request *r, const volatile int *cancel, work_reply *ou
 enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
 {
     if (!r->text) return route_compute(c, r);
+    if (!r->task)
+        r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
     return route_offload(c, r, srv.slots, psd_text_work, NULL, 0);
 }

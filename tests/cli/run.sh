@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The command line build/ljgap against shared/docs/api.md: exit status (0 for a 2xx answer,
+# The command line build/ljgap against its contract (docs/api.md): exit status (0 for a 2xx answer,
 # 1 for a problem, 2 for usage or read errors), one line of JSON on stdout, the same answer
 # from a file as from stdin. Prints one "ok ..." or "not ok ..." line per check.
 set -u
@@ -39,7 +39,7 @@ check "--version exits 0" rc_is 0
 check "--version prints the version" grep -q '^ljgap [0-9]' "$tmp/out"
 run --help
 check "--help exits 0" rc_is 0
-check "--help prints usage" grep -q 'usage: ljgap NAME' "$tmp/out"
+check "--help prints usage" grep -q 'usage: ljgap \[--csv\] NAME' "$tmp/out"
 run
 check "no endpoint is a usage error (2)" rc_is 2
 run adhesion "$tmp/no-such-file"

@@ -1,25 +1,30 @@
-/* fuzz_handler.c -- libFuzzer target on ljgap_handle, the one request handler.
+/* fuzz_handler.c -- libFuzzer target on ljgap_handle_call, the one request handler.
  *
- * An input is "ENDPOINT\nBODY": the first line names the endpoint (adhesion, traction, pdf,
- * sweep, contact, psd, or anything else for a 404; "simulations" goes through
- * ljgap_sim_request_parse and, when valid, ljgap_sim_request_run; "text:NAME?QUERY" is a text
- * upload, ljgap_handle_text with the query split at '&' and '=' into parameters, as the daemon
- * hands them over after decoding), the rest is the request body,
- * handed over in a buffer of exactly its length (no NUL after it), so that any read past the end is
- * caught by AddressSanitizer. An input without a newline is all endpoint name and an empty body.
+ * An input is "ENDPOINT\nBODY" or "ENDPOINT\tACCEPT\nBODY": the first line names the endpoint
+ * (adhesion, traction, pdf, sweep, contact, psd, or anything else for a 404; "simulations" goes
+ * through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run, and then, when there
+ * is an Accept, its result through ljgap_sim_status_answer as a finished job's status;
+ * "text:NAME?QUERY" is a text upload, ljgap_handle_text with the query split at '&' and '='
+ * into parameters, as the daemon hands them over after decoding), and after a tab the value of
+ * the Accept header; the rest is the request body, handed over in a buffer of exactly its
+ * length (no NUL after it), so that any read past the end is caught by AddressSanitizer. An
+ * input without a newline is all endpoint name and an empty body.
  *
  * Besides crashes, leaks and undefined behaviour (the sanitizers), every answer is checked
- * against the contract (shared/docs/api.md) and the handler's own rules, and any breach
- * aborts (the fuzzer keeps the input):
- *   - status is 200, 400, 404 or 422 (500 would be out of memory, 503 a cancel: neither
- *     happens here), and 404 exactly when the endpoint is unknown;
- *   - the body is exactly one JSON object in valid UTF-8 (RFC 8259 §8.1), len ==
+ * against the contract (docs/api.md) and the handler's own rules, and any breach aborts (the
+ * fuzzer keeps the input):
+ *   - status is 200, 400, 404, 406 or 422 (500 would be out of memory, 503 a cancel: neither
+ *     happens here), 404 exactly when the endpoint is unknown, 406 only with an Accept;
+ *   - a text/csv answer (200 only) is valid UTF-8 and well formed: '#' comment lines, then a
+ *     header, then rows with as many cells as the header, each cell empty, a finite number,
+ *     inf, true or false;
+ *   - any other body is exactly one JSON object in valid UTF-8 (RFC 8259 §8.1), len ==
  *     strlen(body), and every number in it is finite; the content type is application/json for 200,
  * application/problem+json else;
  *   - 200: meta {method, elapsed_ms >= 0, version, warnings[] of strings, cached false},
  *     an "error" object (a sweep's in its first result), and no warning saying a result was not
  * finite (that would be NaN or Inf computed by the core and papered over with null);
- *   - problems: type https://ljgap.example/problems/..., title, status equal to the HTTP
+ *   - problems: type /problems/..., title, status equal to the HTTP
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
  *     pointer that names a member of the request or a missing member of one that exists; for a
  *     text upload, a cell, row or the whole of /topography/heights within the lines sent, a
@@ -218,8 +223,7 @@ static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc
     const cJSON *errs = cJSON_GetObjectItemCaseSensitive(doc, "errors"), *e;
     if (strcmp(r->content_type, "application/problem+json") != 0)
         breach(ep, r, "a problem sent as %s", r->content_type);
-    if (!cJSON_IsString(type) ||
-        strncmp(type->valuestring, "https://ljgap.example/problems/", 30) != 0 ||
+    if (!cJSON_IsString(type) || strncmp(type->valuestring, "/problems/", 10) != 0 ||
         !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "title")) ||
         !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "detail")) || !cJSON_IsNumber(st) ||
         st->valuedouble != r->status || !cJSON_IsArray(errs)) {
@@ -368,12 +372,78 @@ end:
     ljgap_job_record_clear(&rec);
 }
 
+/* Is the cell empty, a finite number, inf, true or false? */
+static int cell_ok(const char *s, size_t n)
+{
+    char buf[64], *end;
+    double v;
+    if (n == 0 || (n == 3 && !memcmp(s, "inf", 3)) || (n == 4 && !memcmp(s, "true", 4)) ||
+        (n == 5 && !memcmp(s, "false", 5)))
+        return 1;
+    if (n >= sizeof buf) return 0;
+    memcpy(buf, s, n);
+    buf[n] = '\0';
+    v = strtod(buf, &end);
+    return *end == '\0' && isfinite(v) && !strpbrk(buf, "nNiIxX");
+}
+
+/* A CSV answer: '#' lines, a header, rows of as many cells as the header, good cells. */
+static void check_csv(const char *ep, const ljgap_reply *r)
+{
+    const char *p = r->body, *e = r->body + r->len;
+    long header = -1, line = 0;
+    if (r->status != 200) breach(ep, r, "a CSV answer with status %d", r->status);
+    if (r->len == 0 || r->body[r->len - 1] != '\n') breach(ep, r, "CSV that does not end a line");
+    for (; p < e; line++) {
+        const char *nl = memchr(p, '\n', (size_t)(e - p)), *c = p;
+        long cells = 1;
+        if (!nl) break;
+        if (*p == '#' && header < 0) {
+            p = nl + 1;
+            continue;
+        }
+        for (const char *q = p; q < nl; q++)
+            cells += *q == ',';
+        if (header < 0) {
+            header = cells;
+        } else {
+            if (cells != header)
+                breach(ep, r, "CSV line %ld has %ld cells, not %ld", line, cells, header);
+            for (const char *q = p; q <= nl; q++)
+                if (q == nl || *q == ',') {
+                    if (!cell_ok(c, (size_t)(q - c)))
+                        breach(ep, r, "CSV line %ld: a bad cell \"%.*s\"", line, (int)(q - c), c);
+                    c = q + 1;
+                }
+        }
+        p = nl + 1;
+    }
+    if (header < 0) breach(ep, r, "CSV without a header line");
+}
+
+/* A finished job's status around a simulation's 200 result, answered as accept asks. */
+static void sim_status(const char *accept, ljgap_reply *r)
+{
+    static const char head[] = "{\"id\":\"0\",\"status\":\"done\",\"progress\":1,"
+                               "\"elapsed_ms\":1,\"result\":";
+    char *st = malloc(sizeof head + r->len + 1);
+    if (!st) return;
+    memcpy(st, head, sizeof head - 1);
+    memcpy(st + sizeof head - 1, r->body, r->len);
+    strcpy(st + sizeof head - 1 + r->len, "}");
+    ljgap_reply_free(r);
+    ljgap_sim_status_answer(st, 200, accept, r);
+    free(st);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const uint8_t *nl = memchr(data, '\n', size);
-    size_t eplen = nl ? (size_t)(nl - data) : size;
-    size_t len = nl ? size - eplen - 1 : 0;
-    char *ep = malloc(eplen + 1), *body = malloc(len ? len : 1);
+    size_t linelen = nl ? (size_t)(nl - data) : size;
+    const uint8_t *tab = memchr(data, '\t', linelen);
+    size_t eplen = tab ? (size_t)(tab - data) : linelen;
+    size_t len = nl ? size - linelen - 1 : 0;
+    char *ep = malloc(eplen + 1), *body = malloc(len ? len : 1), *accept = NULL;
     ljgap_reply r = {0};
     cJSON *doc = NULL, *req = NULL;
     text_req *text = NULL;
@@ -382,6 +452,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!ep || !body) goto end;
     memcpy(ep, data, eplen);
     ep[eplen] = '\0';
+    if (tab && !(accept = strndup((const char *)tab + 1, linelen - eplen - 1))) goto end;
     if (len) memcpy(body, nl + 1, len);
     if (strcmp(ep, "@x-forwarded-for") == 0) {
         fuzz_forwarded(body, len);
@@ -408,24 +479,34 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             text->lines += body[i] == '\n';
         text->lines++;
         known = ljgap_handler_has_text(ep + 5);
-        ljgap_handle_text(ep + 5, text->p, text->np, body, len, NULL, &r);
+        {
+            ljgap_call call = {.accept = accept};
+            ljgap_handle_text(ep + 5, text->p, text->np, body, len, &call, &r);
+        }
     } else if (strcmp(ep, "simulations") == 0) {
         ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, &r);
         known = 1;
         if (sr) ljgap_sim_request_run(sr, &sim_control, &r);
         ljgap_sim_request_free(sr);
+        if (r.status == 200 && accept) sim_status(accept, &r);
     } else {
-        ljgap_handle(ep, body, len, &r);
+        ljgap_call call = {.accept = accept};
+        ljgap_handle_call(ep, body, len, &call, &r);
     }
     if (!r.body || !r.content_type) {
         breach(ep, &r, "no body or no content type");
         goto end;
     }
     if (strlen(r.body) != r.len) breach(ep, &r, "len %zu != strlen(body)", r.len);
-    if (r.status != 200 && r.status != 400 && r.status != 404 && r.status != 422)
-        breach(ep, &r, "status outside 200, 400, 404, 422");
+    if (r.status != 200 && r.status != 400 && r.status != 404 && r.status != 406 && r.status != 422)
+        breach(ep, &r, "status outside 200, 400, 404, 406, 422");
     if ((r.status == 404) != !known) breach(ep, &r, "404 must mean exactly: unknown endpoint");
+    if (r.status == 406 && !accept) breach(ep, &r, "406 without an Accept header");
     if (!utf8_ok(r.body, r.len)) breach(ep, &r, "not valid UTF-8");
+    if (strncmp(r.content_type, "text/csv", 8) == 0) {
+        check_csv(ep, &r);
+        goto end;
+    }
     doc = cJSON_ParseWithLengthOpts(r.body, r.len, &end, 0);
     if (!cJSON_IsObject(doc) || end != r.body + r.len) {
         breach(ep, &r, "the body is not one JSON object");
@@ -433,7 +514,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (!all_finite(doc)) breach(ep, &r, "a number that is not finite");
     if (r.status == 200) {
-        check_ok(ep, &r, doc);
+        const cJSON *res = cJSON_GetObjectItemCaseSensitive(doc, "result"); /* job status */
+        check_ok(ep, &r, res && !strcmp(ep, "simulations") ? res : doc);
     } else {
         /* pointers are checked against the request when it is JSON (422 answers) */
         if (r.status == 422 && !text) req = cJSON_ParseWithLength(body, len);
@@ -446,5 +528,6 @@ end:
     ljgap_reply_free(&r);
     free(ep);
     free(body);
+    free(accept);
     return 0;
 }

@@ -23,7 +23,7 @@ CHECK_PREFIX="jobs: "
 
 problem() { # problem STATUS: the last answer is an RFC 9457 problem with that status
     [ "$STATUS" = "$1" ] && [ "$(hdr Content-Type)" = application/problem+json ] &&
-        json --argjson s "$1" '.status == $s and (.type | startswith("https://ljgap.example/problems/"))
+        json --argjson s "$1" '.status == $s and (.type | startswith("/problems/"))
             and (.title | type == "string") and (.detail | type == "string")'
 }
 

@@ -36,7 +36,7 @@ static void reply_problem(ljgap_reply *out, int status, const char *slug)
 {
     char buf[200];
     snprintf(buf, sizeof buf,
-             "{\"type\":\"https://ljgap.example/problems/%s\",\"title\":\"t\",\"status\":%d,"
+             "{\"type\":\"/problems/%s\",\"title\":\"t\",\"status\":%d,"
              "\"detail\":\"d\",\"errors\":[]}",
              slug, status);
     reply(out, status, buf);

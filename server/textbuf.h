@@ -1,0 +1,27 @@
+/* textbuf.h -- a growing, NUL-terminated text buffer for answers built piece by piece (the CSV
+ * writer, the problem pages).
+ *
+ *   ljgap_textbuf b = {0};
+ *   ljgap_textbuf_printf(&b, "%s,%d\n", name, n);   ... as often as needed
+ *   if (b.oom) ... else use b.s (b.len bytes), then free(b.s)
+ *
+ * After an allocation fails, b.oom is set, further appends do nothing, and b.s is freed.
+ */
+#ifndef LJGAP_TEXTBUF_H
+#define LJGAP_TEXTBUF_H
+
+#include <stddef.h>
+
+typedef struct {
+    char *s;    /* the text (malloc'd, NUL-terminated), NULL until the first append */
+    size_t len; /* bytes in s, without the NUL */
+    size_t cap; /* bytes allocated */
+    int oom;    /* an allocation failed: s is NULL and stays so */
+} ljgap_textbuf;
+
+void ljgap_textbuf_printf(ljgap_textbuf *b, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+/* Appends n bytes of s. */
+void ljgap_textbuf_put(ljgap_textbuf *b, const char *s, size_t n);
+
+#endif

@@ -1,0 +1,146 @@
+#!/usr/bin/env bash
+# The project on its own (issue 14): no tracked file names a path outside the repository; a
+# clone of the repository alone, with nothing beside it, builds and serves its page; the daemon
+# serves the compiled-in page with no flags (every file the page loads, the icon, ETag and 304)
+# or a directory with --web DIR; every problem type openapi.json lists is a page of the running
+# server. One "ok"/"not ok" line per check.
+#   BUILD=build tests/standalone/run.sh
+set -u
+cd "$(dirname "$0")/../.."
+ROOT=$PWD
+BUILD=${BUILD:-build}
+BIN=$ROOT/$BUILD/ljgapd
+WRAP=${WRAP:-}
+SLOW=1
+. tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json
+
+# ---- nothing outside the repository ----
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+    hits=$(git grep -n -I -E 'shared/(docs|seed)|\.\./shared' -- . ':!tests/standalone/run.sh' |
+        head -n 5)
+    check "no tracked file names shared/docs, shared/seed or ../shared${hits:+ ($hits)}" \
+        [ -z "$hits" ]
+else
+    echo "not ok - not a git checkout: cannot list the tracked files"
+fi
+
+# ---- the page compiled in: started from an empty directory, no flags ----
+mkdir -p "$tmp/empty"
+cd "$tmp/empty"
+if ! start embedded; then
+    echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/embedded.err")"
+    exit 1
+fi
+cd "$ROOT"
+req GET /
+check "GET / with no --web, from an empty directory: the page (web/index.html)" \
+    eval '[ "$STATUS" = 200 ] && [[ "$(hdr Content-Type)" == text/html* ]] &&
+        cmp -s "$tmp/body" web/index.html'
+# every local file the page loads (src= and href=), and the icon browsers ask for by themselves
+refs=$(grep -o -E '(src|href)="[^"#:]+"' web/index.html | sed -E 's/^(src|href)="//; s/"$//' |
+    grep -v '^/openapi.json$' | sort -u)
+bad=""
+n=0
+for f in $refs favicon.ico; do
+    req GET "/${f#/}"
+    n=$((n + 1))
+    [ "$STATUS" = 200 ] && cmp -s "$tmp/body" "web/${f#/}" || bad="$bad $f($STATUS)"
+done
+check "every file the page loads ($n, icons included) is served with its bytes${bad:+ (not:$bad)}" \
+    eval '[ -z "$bad" ] && [ "$n" -ge 8 ]'
+req GET /favicon.ico
+check "GET /favicon.ico: 200 image/x-icon (no 404 in the browser's console)" \
+    eval '[ "$STATUS" = 200 ] && [ "$(hdr Content-Type)" = image/x-icon ]'
+req GET /app.js
+etag=$(hdr ETag)
+check "compiled-in files carry an ETag and Cache-Control: no-cache" \
+    eval '[[ "$etag" =~ ^\"[0-9a-f]{16}\"$ ]] && [ "$(hdr Cache-Control)" = no-cache ]'
+rm -f "$tmp/body" # curl leaves an empty answer's file as it was
+req GET /app.js -H "If-None-Match: $etag"
+check "If-None-Match with the ETag: 304, no body" eval '[ "$STATUS" = 304 ] && [ ! -s "$tmp/body" ]'
+req GET /app.js -H 'If-None-Match: "0000000000000000"'
+check "another ETag: 200 with the file" eval '[ "$STATUS" = 200 ] && cmp -s "$tmp/body" web/app.js'
+for p in /secret.txt /package.json /.x.js /vendor/deeper/x.js /../Makefile /%2e%2e/Makefile; do
+    req GET "$p" --path-as-is
+    check "GET $p: 404 problem" eval '[ "$STATUS" = 404 ] &&
+        [ "$(hdr Content-Type)" = application/problem+json ]'
+done
+
+# ---- problem types are pages of this server ----
+req GET /openapi.json
+types=$(jq -r '.components.schemas.Problem.properties.type.enum[]' "$tmp/body")
+bad=""
+n=0
+for t in $types; do
+    n=$((n + 1))
+    req GET "$t"
+    [ "$STATUS" = 200 ] && [[ "$(hdr Content-Type)" == text/html* ]] &&
+        grep -q "<h1>" "$tmp/body" && grep -q "How to fix the request" "$tmp/body" ||
+        bad="$bad $t($STATUS)"
+done
+check "each of the $n problem types in openapi.json resolves to a page${bad:+ (not:$bad)}" \
+    eval '[ -z "$bad" ] && [ "$n" -ge 12 ]'
+req GET /problems/
+check "GET /problems/: the list, linking every type" eval '[ "$STATUS" = 200 ] &&
+    [ "$(grep -c "href=\"/problems/[a-z-]*\"" "$tmp/body")" -ge "$n" ]'
+req GET /problems/no-such-type
+check "GET /problems/no-such-type: 404 problem" \
+    eval '[ "$STATUS" = 404 ] && json ".type == \"/problems/not-found\""'
+req POST /v1/adhesion -H 'Content-Type: application/json' -d '{"psd":{"kind":"power","D":2.5,"k1":0.3,"m0":0.5}}'
+type=$(jq -r .type "$tmp/body")
+req GET "$type"
+check "a 422's type ($type) is a page of the server that sent it" \
+    eval '[ "$STATUS" = 200 ] && grep -q "Invalid request" "$tmp/body"'
+req POST /v1/adhesion -H 'Content-Type: text/plain' -d '{}'
+type=$(jq -r .type "$tmp/body")
+req GET "$type"
+check "a 415's type ($type) is a page of the server that sent it" eval '[ "$STATUS" = 200 ]'
+kill -TERM "$PID"
+wait "$PID"
+
+# ---- --web DIR serves a directory instead ----
+mkdir -p "$tmp/web"
+echo '<!doctype html><title>ljgap</title><p>edited' >"$tmp/web/index.html"
+if start webdir --web "$tmp/web"; then
+    req GET /
+    check "--web DIR: GET / serves DIR/index.html" cmp -s "$tmp/body" "$tmp/web/index.html"
+    req GET /app.js
+    check "--web DIR: a file DIR lacks is 404 (the compiled-in copy is not mixed in)" \
+        [ "$STATUS" = 404 ]
+    kill -TERM "$PID"
+    wait "$PID"
+else
+    echo "not ok - ljgapd --web DIR did not start"
+fi
+
+# ---- a clone of the repository alone builds and serves ----
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+    mkdir -p "$tmp/alone"
+    if git clone -q --no-hardlinks "$ROOT" "$tmp/alone/ljgap" 2>"$tmp/clone.err" &&
+        env -u MAKEFLAGS -u MAKELEVEL nice make -s -C "$tmp/alone/ljgap" -j2 programs SANITIZE= BUILD=build \
+            >"$tmp/clone.log" 2>&1; then
+        echo "ok - a clone of the committed tree alone (nothing beside it) builds its programs"
+        BIN=$tmp/alone/ljgap/build/ljgapd
+        cd "$tmp/empty"
+        if start clone; then
+            req GET /
+            check "the clone's ljgapd serves its page" eval '[ "$STATUS" = 200 ] &&
+                grep -q "<title>ljgap</title>" "$tmp/body"'
+            req GET /vendor/uPlot.iife.min.js
+            check "... with uPlot from npm compiled in" \
+                eval '[ "$STATUS" = 200 ] && [ "$(wc -c <"$tmp/body")" -gt 10000 ]'
+            req POST /v1/adhesion -H 'Content-Type: application/json' \
+                -d '{"psd":{"kind":"power","D":2.5,"k1":1,"m0":0.5}}'
+            check "... and computes (Fig. 4: g_eq 2.6028)" \
+                json '(.g_eq - 2.6028 | fabs) < 1e-4'
+            kill -TERM "$PID"
+            wait "$PID"
+        else
+            echo "not ok - the clone's ljgapd did not start"
+        fi
+        cd "$ROOT"
+    else
+        echo "not ok - a clone of the committed tree alone does not build: $(tail -c 400 \
+            "$tmp/clone.err" "$tmp/clone.log")"
+    fi
+fi
