@@ -94,6 +94,7 @@ curl -s --max-time 0.5 -o /dev/null -H "$H" --data-binary "$LONG" "$URL/v1/adhes
 t0=$(date +%s.%N)
 post "$(fast 0.21)"
 took=$(elapsed "$t0")
+cp "$tmp/body" "$tmp/first.json"
 check "an abandoned 1e6-sample request frees its slot: the next answers 200 in ${took} s (< 1 s)" \
     eval '[ "$STATUS" = 200 ] && lt "$took" $((1 * SLOW))'
 check "the log says the client went away and the computation was cancelled" \
@@ -119,6 +120,9 @@ check "/healthz while the slot is busy and the queue is not empty: 200 in ${hz} 
 post "$(fast 0.21)"
 check "a cached answer while the slot is busy: 200 at once, meta.cached" \
     eval '[ "$STATUS" = 200 ] && json ".meta.cached == true"'
+check "the cached answer is the first one but for meta.cached" \
+    eval '[ "$(jq -S "del(.meta.cached)" "$tmp/body")" = "$(jq -S "del(.meta.cached)" "$tmp/first.json")" ] &&
+        jq -e ".meta.cached == false" "$tmp/first.json" >/dev/null'
 check "a waiting request whose client went away left the queue without running" \
     eval 'wait_grep 2 "went away after [0-9.]*s)" "$tmp/one.err"'
 wait_files $((10 * SLOW)) "$tmp/hold"
