@@ -57,5 +57,6 @@ bad=$(awk '{ s += $9 } END { print s + 0 }' "$tmp/res")
         printf "median_single_request_ms %.3f\n", 1e3 / o
         printf "median_answers_per_s_at_%d_connections %.1f\n", 2 * c, f
         printf "efficiency %.2f (answers/s over cores / single-request time)\n", f / (c * o)
-        printf "answers_not_200 %d\n", b }'
+        printf "answers_not_200 %d\n", b
+        printf "ratio_to_before_issue_19 %.2f (273 answers/s, efficiency 0.88, thread per connection)\n", f / 273 }'
 } | tee "$out"
