@@ -18,6 +18,7 @@
  * held. Two condition variables on CLOCK_MONOTONIC: `work` (a job was submitted here, or
  * stopping) and `finished` (a job running here returned, or the keeper must wake).
  */
+#include "clock.h"
 #include "jobs.h"
 #include "jobstatus.h"
 #include "ljgap.h"
@@ -76,22 +77,6 @@ void ljgap_jobs_config_default(ljgap_jobs_config *c)
     c->progress_seconds = 0.5;
     c->poll_seconds = 1.0;
     c->max_lost = 3;
-}
-
-/* Absolute CLOCK_MONOTONIC time s seconds from now. */
-static struct timespec deadline_in(double s)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    if (!(s > 0)) return t;
-    if (s > 1e6) s = 1e6;
-    t.tv_sec += (time_t)s;
-    t.tv_nsec += (long)((s - floor(s)) * 1e9);
-    if (t.tv_nsec >= 1000000000L) {
-        t.tv_sec++;
-        t.tv_nsec -= 1000000000L;
-    }
-    return t;
 }
 
 /* Logs a store failure (what + the store's reason), at most once per LOG_SECONDS. */
@@ -250,7 +235,7 @@ static void *worker(void *arg)
         if (st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_EMPTY) log_store(js, "claim", NULL);
         pthread_mutex_lock(&js->lock);
         if (st != LJGAP_JOBSTORE_OK) {
-            struct timespec until = deadline_in(js->cfg.poll_seconds);
+            struct timespec until = ljgap_deadline_in(js->cfg.poll_seconds);
             if (!js->stopping && js->submitted == seen)
                 pthread_cond_timedwait(&js->work, &js->lock, &until);
             continue;
@@ -318,7 +303,7 @@ static void *keeper(void *arg)
     double next_evict = ljgap_now() + EVICT_SECONDS;
     pthread_mutex_lock(&js->lock);
     while (!js->keeper_quit) {
-        struct timespec until = deadline_in(tick);
+        struct timespec until = ljgap_deadline_in(tick);
         double now;
         pthread_cond_timedwait(&js->finished, &js->lock, &until);
         now = ljgap_now();
@@ -343,7 +328,6 @@ ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
                              const ljgap_job_kind *kinds, size_t nkinds)
 {
     ljgap_jobs *js;
-    pthread_condattr_t ca;
     char host[64] = "localhost";
     if (!c || !store || !kinds || !nkinds || c->workers < 1 || c->queue_cap < 1 ||
         !(c->keep_seconds >= 0) || !(c->lease_seconds > 0 && c->lease_seconds <= 86400) ||
@@ -369,11 +353,8 @@ ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
     host[sizeof host - 1] = '\0';
     snprintf(js->owner, sizeof js->owner, "%s:%ld", host, (long)getpid());
     pthread_mutex_init(&js->lock, NULL);
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&js->work, &ca);
-    pthread_cond_init(&js->finished, &ca);
-    pthread_condattr_destroy(&ca);
+    ljgap_cond_init_monotonic(&js->work);
+    ljgap_cond_init_monotonic(&js->finished);
     for (unsigned w = 0; w < c->workers; w++)
         js->slots[w].js = js;
     while (js->n_threads < c->workers && pthread_create(&js->threads[js->n_threads], NULL, worker,
@@ -463,7 +444,7 @@ int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json
     }
     while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap_now() < until) {
         /* woken when a job here returns; a job running elsewhere is looked at every 0.1 s */
-        struct timespec t = deadline_in(fmin(until - ljgap_now(), 0.1));
+        struct timespec t = ljgap_deadline_in(fmin(until - ljgap_now(), 0.1));
         pthread_mutex_lock(&js->lock);
         pthread_cond_timedwait(&js->finished, &js->lock, &t);
         pthread_mutex_unlock(&js->lock);
@@ -502,7 +483,7 @@ static int any_busy(const ljgap_jobs *js)
 
 int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s)
 {
-    struct timespec until = deadline_in(wait_s);
+    struct timespec until = ljgap_deadline_in(wait_s);
     int idle;
     pthread_mutex_lock(&js->lock);
     while (any_busy(js) && pthread_cond_timedwait(&js->finished, &js->lock, &until) == 0)

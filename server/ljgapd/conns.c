@@ -11,6 +11,7 @@
  * exists only while its count is positive, so the table holds at most one entry per request
  * in progress.
  */
+#include "clock.h"
 #include "conns.h"
 #include "ljgap.h"
 
@@ -69,12 +70,7 @@ static void *sweep_main(void *arg)
             r->cut = 1;
             cs->stats.cut++;
         }
-        clock_gettime(CLOCK_MONOTONIC, &until);
-        until.tv_nsec += SWEEP_MS * 1000000L;
-        if (until.tv_nsec >= 1000000000L) {
-            until.tv_sec++;
-            until.tv_nsec -= 1000000000L;
-        }
+        until = ljgap_deadline_in(SWEEP_MS / 1000.0);
         pthread_cond_timedwait(&cs->quit_cv, &cs->lock, &until);
     }
     pthread_mutex_unlock(&cs->lock);
@@ -84,14 +80,10 @@ static void *sweep_main(void *arg)
 conns *conns_start(double receive_s)
 {
     conns *cs;
-    pthread_condattr_t ca;
     if (!(receive_s > 0) || !(cs = calloc(1, sizeof *cs))) return NULL;
     cs->receive_s = receive_s;
     pthread_mutex_init(&cs->lock, NULL);
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&cs->quit_cv, &ca);
-    pthread_condattr_destroy(&ca);
+    ljgap_cond_init_monotonic(&cs->quit_cv);
     if (pthread_create(&cs->sweeper, NULL, sweep_main, cs) != 0) {
         conns_free(cs);
         return NULL;

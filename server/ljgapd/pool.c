@@ -23,6 +23,7 @@
  * and wake(t) run without it. After wake(t) the task belongs to the caller again and the
  * scheduler never touches it.
  */
+#include "clock.h"
 #include "pool.h"
 #include "ljgap.h"
 
@@ -254,7 +255,6 @@ static void *watch_main(void *arg)
 pool *pool_start(const pool_config *c)
 {
     pool *s;
-    pthread_condattr_t ca;
     size_t npoll;
 
     if (!c || c->slots < 1 || !(c->queue_wait > 0)) return NULL;
@@ -265,11 +265,8 @@ pool *pool_start(const pool_config *c)
     s->pfd = calloc(npoll, sizeof *s->pfd);
     s->pser = calloc(npoll, sizeof *s->pser);
     pthread_mutex_init(&s->lock, NULL);
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&s->work, &ca);
-    pthread_cond_init(&s->ended, &ca);
-    pthread_condattr_destroy(&ca);
+    ljgap_cond_init_monotonic(&s->work);
+    ljgap_cond_init_monotonic(&s->ended);
     if (!s->threads || !s->pfd || !s->pser) {
         pool_free(s);
         return NULL;
@@ -337,22 +334,6 @@ unsigned pool_retry_after(pool *s)
     return r < 1 ? 1 : r > 60 ? 60 : (unsigned)r;
 }
 
-/* Absolute CLOCK_MONOTONIC time s seconds from now. */
-static struct timespec deadline_in(double sec)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    if (!(sec > 0)) return t;
-    if (sec > 1e6) sec = 1e6;
-    t.tv_sec += (time_t)sec;
-    t.tv_nsec += (long)((sec - floor(sec)) * 1e9);
-    if (t.tv_nsec >= 1000000000L) {
-        t.tv_sec++;
-        t.tv_nsec -= 1000000000L;
-    }
-    return t;
-}
-
 /* Waits (lock held) until nothing runs or `until`; 1 when nothing runs. */
 static int wait_running(pool *s, const struct timespec *until)
 {
@@ -363,7 +344,7 @@ static int wait_running(pool *s, const struct timespec *until)
 
 int pool_stop(pool *s, double grace_s, double wait_s)
 {
-    struct timespec grace = deadline_in(grace_s), until = deadline_in(grace_s + wait_s);
+    struct timespec grace = ljgap_deadline_in(grace_s), until = ljgap_deadline_in(grace_s + wait_s);
     pool_task *woken = NULL;
     int idle;
 
