@@ -85,7 +85,7 @@ static int validation(FILE *curves)
         double L;
         int nf, nh, match, R;
     } set[] = {{"L=2pi", 2 * M_PI, 128, 32, 1, 8},
-               {"L=2pi,raw", 2 * M_PI, 128, 32, 0, 8},
+               {"L=2pi-raw", 2 * M_PI, 128, 32, 0, 8},
                {"L=8pi", 8 * M_PI, 256, 64, 1, 4}};
     printf("setting,m0,k_split,n_full,n_hyb,R,max_diff,max_diff_err,at_g,theory_diff,"
            "theory_at_g,removed,t_full_s,t_hyb_s,ratio\n");

@@ -51,6 +51,7 @@ void sim_law_free(sim_law *law)
 {
     if (!law) return;
     free(law->g);
+    free(law->bin);
     sim_law_lj(law);
 }
 
@@ -70,75 +71,72 @@ static void fd_slopes(const double *y, size_t m, size_t s, double dt, double *ou
 #undef Y
 }
 
-/* The cubic Hermite interpolant on [a, b] (values ya, yb, slopes sa, sb in g) at x: value,
- * slope, and ∫_x^b. */
-static void hermite(double a, double b, double ya, double yb, double sa, double sb, double x,
-                    double *y, double *dy, double *integ)
+/* The cubic Hermite interpolant on a cell of width h (values y0, y1 and slopes s0, s1 at its
+ * ends) as c0 + c1 x + c2 x² + c3 x³ in x = g - (its left end). */
+static void cubic_coef(double h, double y0, double y1, double s0, double s1, double *c)
 {
-    double h = b - a, s = (x - a) / h, s2 = s * s, s3 = s2 * s;
-    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
-    if (y) *y = h00 * ya + h10 * h * sa + h01 * yb + h11 * h * sb;
-    if (dy)
-        *dy = (6 * s2 - 6 * s) * (ya - yb) / h + (3 * s2 - 4 * s + 1) * sa + (3 * s2 - 2 * s) * sb;
-    if (integ) {
-        /* antiderivatives of the basis in s, from s to 1 */
-        double s4 = s2 * s2;
-        double H00 = 0.5 - (s - s3 + 0.5 * s4),
-               H10 = 1.0 / 12 - (0.5 * s2 - 2.0 / 3 * s3 + 0.25 * s4), H01 = 0.5 - (s3 - 0.5 * s4),
-               H11 = -1.0 / 12 - (-s3 / 3 + 0.25 * s4);
-        *integ = h * (H00 * ya + H10 * h * sa + H01 * yb + H11 * h * sb);
-    }
+    double D = (y1 - y0) / h;
+    c[0] = y0;
+    c[1] = s0;
+    c[2] = (3 * D - 2 * s0 - s1) / h;
+    c[3] = (s0 + s1 - 2 * D) / (h * h);
 }
 
-/* The cell holding g (g_lo < g < g_hi). */
+/* The cubic c at x: value, slope and its integral from 0 to x (each may be NULL). */
+static void cubic_at(const double *c, double x, double *y, double *dy, double *integ)
+{
+    if (y) *y = c[0] + x * (c[1] + x * (c[2] + x * c[3]));
+    if (dy) *dy = c[1] + x * (2 * c[2] + x * 3 * c[3]);
+    if (integ) *integ = x * (c[0] + x * (c[1] / 2 + x * (c[2] / 3 + x * c[3] / 4)));
+}
+
+/* The cell holding g (g_lo < g < g_hi): bins no wider than the narrowest cell give it, or the
+ * cell before it (no logarithm in the solver's inner loop). */
 static size_t cell(const sim_law *L, double g)
 {
-    double x = (log(g) - L->t0) / L->dt;
-    size_t i = x > 0 ? (size_t)x : 0;
-    return i < L->n - 1 ? i : L->n - 2;
+    size_t b = (size_t)((g - L->g_lo) * L->inv_bw), i;
+    i = L->bin[b < L->nbin ? b : L->nbin - 1];
+    while (i + 2 < L->n && g >= L->g[i + 1])
+        i++;
+    return i;
 }
 
-void sim_law_eval(const sim_law *L, double g, double *sigma, double *dsigma)
+void sim_law_eval(const sim_law *L, double g, double *sigma, double *dsigma, double *work)
 {
-    double s, ds, d, dd;
+    double s, ds, d, dd, part = 0.0;
     if (!L->tabulated) {
         lj_eval(g, sigma, dsigma);
+        if (work) *work = ljgap_sigma_work(g);
         return;
     }
     if (g >= L->g_hi) {
         *sigma = ljgap_sigma_smoothed(g, L->m0);
         *dsigma = ljgap_dsigma_smoothed(g, L->m0);
+        if (work) *work = ljgap_sigma_work_smoothed(g, L->m0);
         return;
     }
     lj_eval(g, &s, &ds);
     if (g <= L->g_lo) {
-        d = L->d[0] + L->dd[0] * (g - L->g_lo);
+        double x = L->g_lo - g;
+        d = L->d[0] - L->dd[0] * x;
         dd = L->dd[0];
+        part = L->I[0] + L->d[0] * x - 0.5 * L->dd[0] * x * x;
     } else {
         size_t i = cell(L, g);
-        hermite(L->g[i], L->g[i + 1], L->d[i], L->d[i + 1], L->dd[i], L->dd[i + 1], g, &d, &dd,
-                NULL);
+        double F = 0.0;
+        cubic_at(L->c + 4 * i, g - L->g[i], &d, &dd, work ? &F : NULL);
+        part = L->I[i] - F;
     }
     *sigma = s + d;
     *dsigma = ds + dd;
+    if (work) *work = ljgap_sigma_work(g) + L->D_hi + part;
 }
 
 double sim_law_work(const sim_law *L, double g)
 {
-    if (!L->tabulated) return ljgap_sigma_work(g);
-    if (g >= L->g_hi) return ljgap_sigma_work_smoothed(g, L->m0);
-    double D;
-    if (g <= L->g_lo) {
-        double x = L->g_lo - g;
-        D = L->I[0] + L->d[0] * x - 0.5 * L->dd[0] * x * x;
-    } else {
-        size_t i = cell(L, g);
-        double part;
-        hermite(L->g[i], L->g[i + 1], L->d[i], L->d[i + 1], L->dd[i], L->dd[i + 1], g, NULL, NULL,
-                &part);
-        D = L->I[i + 1] + part;
-    }
-    return ljgap_sigma_work(g) + L->D_hi + D;
+    double s, ds, w;
+    sim_law_eval(L, g, &s, &ds, &w);
+    return w;
 }
 
 double sim_law_err(const sim_law *L, double g)
@@ -163,18 +161,29 @@ int sim_law_fine(sim_law *law, const ljgap_psd *fine, const ljgap_opts *o, ljgap
     cells += cells % 2; /* even: the half table keeps both ends */
     L.n = cells + 1;
     L.dt = (log(L.g_hi) - L.t0) / (double)cells;
+    L.g = malloc(9 * L.n * sizeof *L.g);
+    for (size_t i = 0; L.g && i < L.n; i++)
+        L.g[i] = exp(L.t0 + (double)i * L.dt);
+    if (L.g) L.g[0] = L.g_lo, L.g[L.n - 1] = L.g_hi;
+    L.inv_bw = L.g ? 1.0 / (L.g[1] - L.g[0]) : 0.0;
+    L.nbin = (size_t)((L.g_hi - L.g_lo) * L.inv_bw) + 1;
+    L.bin = malloc(L.nbin * sizeof *L.bin);
     ljgap_est *est = malloc(L.n * sizeof *est);
     double *half = malloc(L.n * sizeof *half);
-    if (!(L.g = malloc(5 * L.n * sizeof *L.g)) || !est || !half) {
+    if (!L.g || !L.bin || !est || !half) {
         free(est);
         free(half);
         sim_law_free(&L);
         return LJGAP_ENOMEM;
     }
     L.d = L.g + L.n, L.dd = L.g + 2 * L.n, L.I = L.g + 3 * L.n, L.e = L.g + 4 * L.n;
-    for (size_t i = 0; i < L.n; i++)
-        L.g[i] = exp(L.t0 + (double)i * L.dt);
-    L.g[0] = L.g_lo, L.g[L.n - 1] = L.g_hi;
+    L.c = L.g + 5 * L.n;
+    for (size_t b = 0, i = 0; b < L.nbin; b++) { /* the cell of each bin's left end */
+        double x = L.g_lo + (double)b / L.inv_bw;
+        while (i + 2 < L.n && x >= L.g[i + 1])
+            i++;
+        L.bin[b] = i;
+    }
     int st = ljgap_traction(fine, o, L.g, L.n, est, &L.sum, w);
     if (st) {
         free(est);
@@ -195,20 +204,20 @@ int sim_law_fine(sim_law *law, const ljgap_psd *fine, const ljgap_opts *o, ljgap
     for (size_t i = 0; i < L.n; i++)
         L.e[i] = est[i].err;
     for (size_t i = 1; i < L.n; i += 2) {
-        double y;
-        hermite(L.g[i - 1], L.g[i + 1], L.d[i - 1], L.d[i + 1], half[i - 1], half[i + 1], L.g[i],
-                &y, NULL, NULL);
+        double c[4], y;
+        cubic_coef(L.g[i + 1] - L.g[i - 1], L.d[i - 1], L.d[i + 1], half[i - 1], half[i + 1], c);
+        cubic_at(c, L.g[i] - L.g[i - 1], &y, NULL, NULL);
         double ie = fabs(y - L.d[i]) / 8.0;
         for (size_t j = i - 1; j <= i + 1; j++)
             L.e[j] += ie;
     }
-    /* integrals from the top, and the far field */
+    /* the cells' cubics, and ∫_{g_i}^{g_hi} from the top (I has a last entry: 0) */
     L.I[L.n - 1] = 0.0;
     for (size_t i = L.n - 1; i-- > 0;) {
-        double part;
-        hermite(L.g[i], L.g[i + 1], L.d[i], L.d[i + 1], L.dd[i], L.dd[i + 1], L.g[i], NULL, NULL,
-                &part);
-        L.I[i] = L.I[i + 1] + part;
+        double h = L.g[i + 1] - L.g[i], whole;
+        cubic_coef(h, L.d[i], L.d[i + 1], L.dd[i], L.dd[i + 1], L.c + 4 * i);
+        cubic_at(L.c + 4 * i, h, NULL, NULL, &whole);
+        L.I[i] = L.I[i + 1] + whole;
     }
     L.D_hi = ljgap_sigma_work_smoothed(L.g_hi, L.m0) - ljgap_sigma_work(L.g_hi);
     double far = ljgap_sigma_smoothed(L.g_hi, L.m0) - ljgap_sigma(L.g_hi);
@@ -223,7 +232,7 @@ int sim_law_fine(sim_law *law, const ljgap_psd *fine, const ljgap_opts *o, ljgap
     for (size_t i = 0; i + 1 < L.n; i++)
         for (int q = 0; q < 4; q++) {
             double x = L.g[i] + 0.25 * q * (L.g[i + 1] - L.g[i]), s, ds;
-            sim_law_eval(&L, x, &s, &ds);
+            sim_law_eval(&L, x, &s, &ds, NULL);
             L.s_min = fmin(L.s_min, ds);
         }
     free(est);

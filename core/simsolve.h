@@ -45,6 +45,7 @@ typedef struct {
     size_t N, nc;  /* real points, complex (half-spectrum) points */
     double *kappa; /* stiffness (3√3/2)|q| per complex index (0 at q = 0) */
     double *h, *u, *Ku, *g, *sig, *s, *G, *d, *Kd, *r, *p, *Kp, *ubak;
+    double *W; /* the law's potential ∫_g^∞ σ at the current gaps (the line search's energy) */
     fftw_complex *c, *c2; /* scratch spectra */
     fftw_complex *P;      /* conjugate-gradient direction, in Fourier space */
     long iter;            /* Hessian products at the current requested gap */

@@ -92,7 +92,7 @@ void ljgap_limits_default(ljgap_limits *l)
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     *l = limits_default;
     l->sweep_threads = n > 0 ? n : 1;
-    l->sim_threads = n > 0 ? n : 1;
+    l->sim_threads = 1;
 }
 
 void ljgap_handler_set_limits(const ljgap_limits *l)

@@ -27,9 +27,11 @@ typedef struct {
                            * cores; 1 computes sequentially); results do not depend on it */
     long max_topo_points; /* cap on the heights of one psd map (default, and when <= 0:
                            * LJGAP_TOPO_POINTS_DEFAULT) */
-    long sim_threads;     /* threads of one simulation run, each computing realizations
-                           * (default, and when <= 0: the online cores); results do not depend
-                           * on it. The daemon's --job-workers bounds the runs at once */
+    long sim_threads;     /* threads of one simulation run, each computing realizations (<= 0:
+                           * the online cores); results do not depend on it. The handler starts
+                           * with 0 (the CLI's foreground run takes every core); ljgap_limits_default
+                           * gives 1 (a daemon's jobs, --job-workers of them at once, leave the
+                           * other cores to the synchronous endpoints) */
     const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
 } ljgap_limits;
 

@@ -55,14 +55,14 @@ static void law_matches_pde(void **state)
     double worst = 0.0;
     for (int i = 0; i < M; i++) {
         double s, ds, sp, sm, d;
-        sim_law_eval(&law, g[i], &s, &ds);
+        sim_law_eval(&law, g[i], &s, &ds, NULL);
         double e = sim_law_err(&law, g[i]);
         assert_true(e > 0.0);
         assert_close(s, pde[i].value, e + pde[i].err);
         worst = fmax(worst, fabs(s - pde[i].value) / fmax(1.0, fabs(s)));
         double h = 1e-5 * g[i];
-        sim_law_eval(&law, g[i] + h, &sp, &d);
-        sim_law_eval(&law, g[i] - h, &sm, &d);
+        sim_law_eval(&law, g[i] + h, &sp, &d, NULL);
+        sim_law_eval(&law, g[i] - h, &sm, &d, NULL);
         assert_close(ds, (sp - sm) / (2 * h), 1e-6 * fmax(1.0, fabs(ds)));
         double dw = -(sim_law_work(&law, g[i] + h) - sim_law_work(&law, g[i] - h)) / (2 * h);
         assert_close(dw, s, 1e-6 * fmax(1.0, fabs(s)));
@@ -70,12 +70,12 @@ static void law_matches_pde(void **state)
     assert_true(worst < 1e-5);
     /* the fine band changes the law (the check is not empty) */
     double s, ds;
-    sim_law_eval(&law, 1.1, &s, &ds);
+    sim_law_eval(&law, 1.1, &s, &ds, NULL);
     assert_true(fabs(s - ljgap_sigma(1.1)) > 0.1);
     /* continuous where the table hands over to the far field */
     double a, b, da, db;
-    sim_law_eval(&law, law.g_hi * (1 - 1e-12), &a, &da);
-    sim_law_eval(&law, law.g_hi * (1 + 1e-12), &b, &db);
+    sim_law_eval(&law, law.g_hi * (1 - 1e-12), &a, &da, NULL);
+    sim_law_eval(&law, law.g_hi * (1 + 1e-12), &b, &db, NULL);
     assert_close(a, b, law.e_hi + 1e-12);
     assert_close(sim_law_work(&law, law.g_hi * (1 - 1e-12)),
                  sim_law_work(&law, law.g_hi * (1 + 1e-12)), 1e-12);
@@ -93,8 +93,8 @@ static void law_matches_pde(void **state)
     assert_int_equal(sim_law_fine(&lt, &tab, &o, &w), LJGAP_OK);
     for (int i = 0; i < M; i += 7) {
         double x, y, dx;
-        sim_law_eval(&law, g[i], &x, &dx);
-        sim_law_eval(&lt, g[i], &y, &dx);
+        sim_law_eval(&law, g[i], &x, &dx, NULL);
+        sim_law_eval(&lt, g[i], &y, &dx, NULL);
         assert_close(x, y, sim_law_err(&law, g[i]) + sim_law_err(&lt, g[i]));
     }
     sim_law_free(&lt);
