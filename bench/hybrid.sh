@@ -5,6 +5,7 @@
 #                                        m0 = 0.1, 0.218, 0.3 and k_split = 2, 3, 4 in three
 #                                        settings, the theory's distance, times and their ratio
 #   bench/results/hybrid_curves.csv      the curves behind it
+#   bench/results/hybrid_fine_alone.csv  the band (3, 8] alone: full model against the theory
 #   bench/results/hybrid_validation.png  L = 8π: full model, hybrid, theory (gnuplot)
 #   bench/results/hybrid_speed.txt       the hybrid at k_split = k2/4 against the full model at
 #                                        the same resolution of its band (median times, ratio),
@@ -16,6 +17,7 @@ out=bench/results
 mkdir -p "$out"
 bin="$BUILD/bench/hybrid"
 nice -n 19 "$bin" --validation --curves "$out/hybrid_curves.csv" >"$out/hybrid_validation.csv"
+nice -n 19 "$bin" --fine-alone >"$out/hybrid_fine_alone.csv"
 {
     echo "# $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m); load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
     echo "# the hybrid at k_split = k2/4 = 2 against the full model, same points per shortest wave"
