@@ -13,6 +13,8 @@
  *   hybrid --speed       the hybrid at k_split = k2/4 against the full model at the same
  *                        resolution of its band (n/4 points: the same points per shortest
  *                        wave), m0 = 0.218, one thread each: median wall times and their ratio.
+ *   hybrid --fftw        FFTW_ESTIMATE against FFTW_MEASURE at n = 256 and 512: planning time and
+ *                        the median time of an r2c + c2r pair
  *   hybrid --discrete    seconds per mean gap of the plain model at n = 256 (L = 8π) and 512
  *                        (L = 16π), and at L = 2π, four realizations on 1 and 2 threads.
  *
@@ -24,6 +26,7 @@
 #include "bench.h"
 #include "ljgap_sim.h"
 
+#include <fftw3.h>
 #include <gsl/gsl_errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -211,6 +214,42 @@ static int discrete(void)
     return 0;
 }
 
+/* FFTW's planner flags at the model's sizes: planning time, and the median time of one r2c + c2r
+ * pair (what the model does three times per conjugate-gradient iteration) over 7 runs of 50. */
+static int fftw_flags(void)
+{
+    printf("n,flag,plan_s,pair_ms_median\n");
+    for (int n = 256; n <= 512; n *= 2) {
+        double *a = fftw_alloc_real((size_t)n * n);
+        fftw_complex *c = fftw_alloc_complex((size_t)n * (n / 2 + 1));
+        if (!a || !c) return 1;
+        static const unsigned flags[2] = {FFTW_ESTIMATE, FFTW_MEASURE};
+        static const char *names[2] = {"estimate", "measure"};
+        for (int f = 0; f < 2; f++) {
+            double t0 = ljgap_now();
+            fftw_plan p = fftw_plan_dft_r2c_2d(n, n, a, c, flags[f]);
+            fftw_plan q = fftw_plan_dft_c2r_2d(n, n, c, a, flags[f]);
+            double tp = ljgap_now() - t0, t[7];
+            for (int r = 0; r < 7; r++) {
+                for (size_t i = 0; i < (size_t)n * n; i++)
+                    a[i] = (double)(i % 7);
+                t0 = ljgap_now();
+                for (int k = 0; k < 50; k++) {
+                    fftw_execute(p);
+                    fftw_execute(q);
+                }
+                t[r] = (ljgap_now() - t0) / 50 * 1e3;
+            }
+            printf("%d,%s,%.3f,%.3f\n", n, names[f], tp, bench_median(t, 7));
+            fftw_destroy_plan(p);
+            fftw_destroy_plan(q);
+        }
+        fftw_free(a);
+        fftw_free(c);
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
@@ -223,8 +262,10 @@ int main(int argc, char **argv)
     }
     if (argc == 2 && !strcmp(argv[1], "--speed")) return speed();
     if (argc == 2 && !strcmp(argv[1], "--fine-alone")) return fine_alone();
+    if (argc == 2 && !strcmp(argv[1], "--fftw")) return fftw_flags();
     if (argc == 2 && !strcmp(argv[1], "--discrete")) return discrete();
     fprintf(stderr,
-            "usage: hybrid --validation [--curves FILE] | --fine-alone | --speed | --discrete\n");
+            "usage: hybrid --validation [--curves FILE] | --fine-alone | --speed | --discrete | "
+            "--fftw\n");
     return 2;
 }

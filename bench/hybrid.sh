@@ -24,6 +24,8 @@ nice -n 19 "$bin" --fine-alone >"$out/hybrid_fine_alone.csv"
     nice -n 19 "$bin" --speed
     echo "# the plain model: Fig. 6 spectrum, m0 = 0.218, gaps 3.0 .. 1.0 (11), 4 realizations"
     nice -n 19 "$bin" --discrete
+    echo "# FFTW planner flags (the model plans with FFTW_ESTIMATE: deterministic)"
+    nice -n 19 "$bin" --fftw
 } >"$out/hybrid_speed.txt"
 column -s, -t <"$out/hybrid_validation.csv"
 cat "$out/hybrid_speed.txt"
