@@ -19,12 +19,13 @@
  * its values on up to limits.sweep_threads threads; each value is independent, so the answer
  * is the sequential one.
  *
- * Simulations (the discrete model, ljgap_sim.h) are not an endpoint of ljgap_handle: a run
- * takes minutes. ljgap_sim_request_parse validates like every endpoint (same problems) and
- * builds the PSD; ljgap_sim_request_run runs it under the caller's cancel flag, progress
- * callback and time cap, and serialises the result. The daemon runs them as background jobs
- * (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll of a job, with
- * a finished job's result as CSV when Accept asks for it.
+ * Simulations (the discrete model, ljgap_sim.h, and its hybrid with the theory when the request
+ * has k_split) are not an endpoint of ljgap_handle: a run takes minutes.
+ * ljgap_sim_request_parse validates like every endpoint (same problems) and builds the PSD;
+ * ljgap_sim_request_run runs it under the caller's cancel flag, progress callback and time cap,
+ * its realizations on limits.sim_threads threads, and serialises the result. The daemon runs them
+ * as background jobs (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll
+ * of a job, with a finished job's result as CSV when Accept asks for it.
  *
  * Problem types: the "type" member of every application/problem+json answer is /problems/SLUG,
  * a page the daemon serves; problems.c holds the status, title and text of each (openapi.json
