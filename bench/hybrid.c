@@ -1,10 +1,10 @@
 /* hybrid.c -- the hybrid model against the fully resolved discrete model, and the discrete
- * model's speed (issues 16 and 19).
+ * model's speed.
  *
  *   hybrid --validation [--curves FILE]  max |hybrid - full| over the mean gap, with its error
  *                        bar, for the Fig. 6 spectrum (D = 2.2, k1 = 1, k2 = 8) at m0 = 0.1,
  *                        0.218, 0.3 and k_split = 2, 3, 4, in three settings: L = 2π with the
- *                        issue's grids (full 128, hybrid 32 points), with and without match_m0,
+ *                        grids 128 (full) and 32 (hybrid), with and without match_m0,
  *                        and L = 8π (full 256, hybrid 64: both converged in n); the theory's own
  *                        distance from the full model; the run times and their ratio. FILE gets
  *                        the curves (full, hybrid, theory at each gap) for the plot.

@@ -1,6 +1,6 @@
 /* theory_map.c -- where the statistical theory holds: the adhesion summary (g_eq, sigma_max,
  * g_at_max, dgamma_eff) of the discrete numerical model (core/sim.c) against the theory's (PDE)
- * and the hybrid's (k_split), for one spectrum per call (issue 16, bench/theory_map.sh runs the
+ * and the hybrid's (k_split), for one spectrum per call (bench/theory_map.sh runs the
  * map over D and m0).
  *
  *   theory_map --D D --m0 M0 [--k1 K1] [--k2 K2] [--n N] [--L L] [--R R] [--threads T]
