@@ -10,23 +10,26 @@
 #   bench/results/hybrid_speed.txt       the hybrid at k_split = k2/4 against the full model at
 #                                        the same resolution of its band (median times, ratio),
 #                                        and seconds per mean gap at n = 256 and 512
+#   BUILD=build bench/hybrid.sh [--plot]   (--plot: only redraw the figure)
 set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 out=bench/results
 mkdir -p "$out"
 bin="$BUILD/bench/hybrid"
-nice -n 19 "$bin" --validation --curves "$out/hybrid_curves.csv" >"$out/hybrid_validation.csv"
-nice -n 19 "$bin" --fine-alone >"$out/hybrid_fine_alone.csv"
-{
-    echo "# $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m); load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-    echo "# the hybrid at k_split = k2/4 = 2 against the full model, same points per shortest wave"
-    nice -n 19 "$bin" --speed
-    echo "# the plain model: Fig. 6 spectrum, m0 = 0.218, gaps 3.0 .. 1.0 (11), 4 realizations"
-    nice -n 19 "$bin" --discrete
-    echo "# FFTW planner flags (the model plans with FFTW_ESTIMATE: deterministic)"
-    nice -n 19 "$bin" --fftw
-} >"$out/hybrid_speed.txt"
+if [ "${1:-}" != --plot ]; then
+    nice -n 19 "$bin" --validation --curves "$out/hybrid_curves.csv" >"$out/hybrid_validation.csv"
+    nice -n 19 "$bin" --fine-alone >"$out/hybrid_fine_alone.csv"
+    {
+        echo "# $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m); load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+        echo "# the hybrid at k_split = k2/4 = 2 against the full model, same points per shortest wave"
+        nice -n 19 "$bin" --speed
+        echo "# the plain model: Fig. 6 spectrum, m0 = 0.218, gaps 3.0 .. 1.0 (11), 4 realizations"
+        nice -n 19 "$bin" --discrete
+        echo "# FFTW planner flags (the model plans with FFTW_ESTIMATE: deterministic)"
+        nice -n 19 "$bin" --fftw
+    } >"$out/hybrid_speed.txt"
+fi
 column -s, -t <"$out/hybrid_validation.csv"
 cat "$out/hybrid_speed.txt"
 if command -v gnuplot >/dev/null; then
@@ -34,7 +37,7 @@ if command -v gnuplot >/dev/null; then
 set terminal pngcairo size 1200,900 font ",10"
 set output "$out/hybrid_validation.png"
 set datafile separator ","
-set multiplot layout 3,3 title "Hybrid (k_split on the grid, the finer band through its statistical law) against the full discrete model, L = 8π: D = 2.2, k_1 = 1, k_2 = 8" font ",12"
+set multiplot layout 3,3 title "Hybrid (k_{split} on the grid, the finer band through its statistical law) against the full discrete model, L = 8π: D = 2.2, k_1 = 1, k_2 = 8" font ",12"
 set xrange [0.85:3.25]
 set grid
 set key bottom right font ",8"
