@@ -5,6 +5,7 @@
 # speed.txt: wall-clock medians (build/bench/speed) and the instructions of one Fig. 4 adhesion
 # and one 200-point traction curve under callgrind (ljgap_traction and all it calls, i.e. one
 # request through the core API), each with its ratio to the figures before issue 19.
+# A script marked "# make bench: skip" (a study of an hour or more) runs only when named.
 set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -47,6 +48,10 @@ for s in bench/*.sh; do
     name=$(basename "$s" .sh)
     [ "$name" = run ] && continue
     want "$@" || continue
+    if [ $# -eq 0 ] && grep -q '^# make bench: skip' "$s"; then
+        echo "== $s: skipped (a study; run it by hand, or bench/run.sh $name)"
+        continue
+    fi
     echo "== $s"
     "$s"
 done

@@ -10,8 +10,8 @@
  *   f has a pole where k < 3g^-4 - 9g^-10; the largest such k is
  *   k0 = (324/3125)^(1/3) at g* = (15/2)^(1/6)                 (19).
  *
- * The smoothed versions E[sigma(g+X)], X ~ N(0,V), are used far from the wall, where the
- * gap transfer is f ≈ 1 and the mean traction is the Lennard-Jones law blurred by the
+ * The smoothed versions E[sigma(g+X)] (and E[sigma'(g+X)]), X ~ N(0,V), are used far from the wall,
+ * where the gap transfer is f ≈ 1 and the mean traction is the Lennard-Jones law blurred by the
  * height variance. They use E[(g+X)^-p] = g^-p Σ_j C(p+2j-1, 2j) (2j-1)!! (V/g^2)^j,
  * an asymptotic series that is summed while its terms decrease.
  */
@@ -82,6 +82,14 @@ double ljgap_sigma_smoothed(double g, double V)
     double x = V / (g * g);
     double g3 = 1.0 / (g * g * g);
     return LJ_A * (g3 * inv_power_moment(3, x) - g3 * g3 * g3 * inv_power_moment(9, x));
+}
+
+double ljgap_dsigma_smoothed(double g, double V)
+{
+    if (!(g > 0) || !(V >= 0) || V > 0.01 * g * g) return NAN;
+    double x = V / (g * g);
+    double g2 = 1.0 / (g * g), g4 = g2 * g2, g10 = g4 * g4 * g2;
+    return LJ_A * (9.0 * g10 * inv_power_moment(10, x) - 3.0 * g4 * inv_power_moment(4, x));
 }
 
 double ljgap_sigma_work_smoothed(double g, double V)

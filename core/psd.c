@@ -179,6 +179,38 @@ int ljgap_psd_truncate(ljgap_psd *out, const ljgap_psd *psd, double kc)
     return st;
 }
 
+int ljgap_psd_above(ljgap_psd *out, const ljgap_psd *psd, double kc)
+{
+    if (!(kc > psd->k1) || !(kc < psd->k2)) return LJGAP_EINVAL;
+    if (psd->kind == LJGAP_PSD_POWER)
+        return ljgap_psd_power(out, psd->D, kc, psd->k2, LJGAP_LEVEL_C, psd->C);
+    /* table: a node at kc, then the nodes above it (or, past the last node, one more node on
+     * the tail); the tail stays */
+    size_t m = 0;
+    while (m < psd->n && psd->k[m] <= kc)
+        m++;
+    size_t n = m < psd->n ? psd->n - m + 1 : 2;
+    double *k = malloc(n * sizeof *k), *P = malloc(n * sizeof *P);
+    if (!k || !P) {
+        free(k);
+        free(P);
+        return LJGAP_ENOMEM;
+    }
+    k[0] = kc;
+    P[0] = ljgap_psd_eval(psd, kc);
+    if (m < psd->n) {
+        memcpy(k + 1, psd->k + m, (n - 1) * sizeof *k);
+        memcpy(P + 1, psd->P + m, (n - 1) * sizeof *P);
+    } else {
+        k[1] = 2.0 * kc;
+        P[1] = ljgap_psd_eval(psd, k[1]);
+    }
+    int st = ljgap_psd_table(out, k, P, n, psd->has_tail, psd->tail_q);
+    free(k);
+    free(P);
+    return st;
+}
+
 /* Index of the segment holding k (k1 <= k < k2): the last i with k[i] <= k. */
 static size_t table_seg(const ljgap_psd *p, double k)
 {

@@ -1,60 +1,41 @@
-/* sim.c -- the discrete numerical model of the paper's Section 5 (theory.md §5).
+/* sim.c -- the discrete numerical model of the paper's Section 5 (theory.md §5), and its hybrid
+ * with the statistical theory (Section 6): a run over realizations and mean gaps.
  *
- * Units as in ljgap.h: gaps in epsilon, lateral lengths in chi, tractions in sigma0.
+ * One realization (simsolve.c) is a random periodic surface on an n x n grid and the
+ * equilibrium of the elastic half-space under the interface law at each prescribed mean gap,
+ * visited from the largest inward (then back out when the energy may be non-convex), each
+ * solve starting from the last. This file checks the inputs, builds the interface law
+ * (simlaw.c: Lennard-Jones, or for the hybrid the statistical law of the band above k_split,
+ * computed once by the PDE), makes the FFTW plans once for the run, runs the realizations on
+ * up to opts.threads threads and gathers the result: the mean over realizations, their
+ * spread, and an error estimate.
  *
- * Surface. A periodic square of side L, n x n points, wavevectors q = (2π/L)(i, j). Each
- * lattice wavevector gets the complex amplitude c_q = sqrt(P(|q|)) (2π/L) e^{iφ_q}, φ_q
- * uniform from GSL's Mersenne twister, c_{-q} = conj(c_q), so the height variance of the
- * realization is exactly the lattice sum m0_grid = Σ_q P(|q|) (2π/L)², a Riemann sum of m0 = 2π∫ k
- * P dk (22). When L is only a few wavelengths of k1 the lattice is coarse where P is largest
- * (m0_grid = 1.75 m0 for D = 2.2, [k1,k2] = [1,8], L = 2π), so by default (opts.match_m0) each
- * realization is scaled to carry the PSD's m0 exactly.
+ * Hybrid. With k_split the grid carries the lattice wavevectors k1 <= |q| <= k_split, scaled
+ * (match_m0) to the variance m0c = 2π∫_{k1}^{k_split} k P dk of that band; the band (k_split,
+ * k2] enters through its law. Both limits are exact: k_split = k1 leaves the grid flat, so
+ * each point sits at the mean gap and the answer is the law itself (the theory alone);
+ * k_split >= k2 leaves no fine band, and the run is the plain model's.
  *
- * Elasticity. The half-space answer to the pressure p̃ = -σ/σ0 is
- *     ũ(q) = (2/(3√3)) p̃(q)/|q|   (q ≠ 0),   since σ0 χ/(E* ε) = 1/(3√3),
- * i.e. the stiffness per wavevector is κ(q) = (3√3/2)|q|, and the gap at prescribed mean gap ḡ
- * is g(x) = ḡ + h(x) + u(x) with u of zero mean.
+ * Error of sigma at each gap: the standard error over realizations, plus the worst effect of
+ * the residual left by the solver (|G| / λ with λ the energy's smallest curvature, bounded
+ * below), plus for the hybrid the mean estimated error of the law at the grid's local gaps.
  *
- * Equations. Equilibrium is the stationary point, over zero-mean u, of the energy per area
- *     E(u) = <½ u K u> + <Φ(ḡ + h + u)>,   Φ(g) = -∫_g^∞ σ dg' (Φ' = σ),
- * whose gradient is the force balance G = K u + σ(g) - <σ(g)> (a traction, units of σ0) and
- * whose Hessian is H v = K v + s v - <s v> with s = σ'(g) = (3√3/2)(9g^-10 - 3g^-4) >= -(3√3/2)k0.
- * So vᵀHv >= (3√3/2)(2π/L - k0)|v|²: when 2π/L > k0 (always for the default L = 2π/k1, since
- * the theory needs k1 > k0) the energy is strictly convex, the equilibrium is unique and
- * there can be no jump or hysteresis; the outward sweep is then skipped (sigma_out = sigma).
- *
- * Solver. Truncated Newton: preconditioned conjugate gradients on H d = -G to a relative
- * tolerance min(0.1, sqrt(|G|)) (Eisenstat-Walker), preconditioner (K + c)^-1 applied in
- * Fourier space (c = the mean positive part of s: the stiff Lennard-Jones wall at points in
- * compression), then a backtracking (Armijo) line search on E that also keeps every gap
- * positive. Negative curvature met by CG (possible only when 2π/L <= k0) ends CG with the
- * last descent direction and marks the step. The stopping test is the honest one: the rms of
- * G over the grid, recomputed with a fresh K u, <= tol * max(1, rms σ).
- *
- * Continuation. Mean gaps are visited from the largest inward (then back out when the energy
- * may be non-convex), in substeps no larger than a quarter of the smallest local gap, so every
- * start is feasible and close; a substep whose solve stalls is halved. A realization "jumps"
- * between two requested gaps when its solver met negative curvature on the way: the branch
- * it followed lost stability.
- *
- * FFTW: plans are made once per run (FFTW_ESTIMATE, under a process-wide lock because the
- * planner is not thread-safe) and executed on many arrays with the new-array interface.
+ * Threads. Realizations are independent: each thread takes the next realization, with its
+ * own workspace, and writes only that realization's slots; the progress callback is called
+ * under a lock with the count of gaps done over all threads. FFTW's planner is not thread-
+ * safe, so plans are made (FFTW_ESTIMATE: deterministic, so a seed gives the same numbers in
+ * every process, and planning costs ~1 ms, nothing next to a run) under a process-wide lock;
+ * executing them on other arrays (fftw_execute_dft_*) is thread-safe. Nothing depends on
+ * which thread ran which realization, so the result does not depend on the number of threads.
  */
 #include "ljgap_sim.h"
+#include "simlaw.h"
+#include "simsolve.h"
 
-#include <fftw3.h>
-#include <gsl/gsl_rng.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define SIM_A 2.598076211353315940 /* 3√3/2 */
-#define SIM_NEWTON_MAX 100         /* Newton steps at one substep */
-#define SIM_CG_MAX 1000            /* CG iterations in one Newton step */
-#define SIM_STEP_FRAC 0.25         /* continuation substep / smallest local gap */
-#define SIM_G_START 1.5            /* smallest local gap of a cold start */
-#define SIM_STALL 2                /* internal: line search or step control failed */
 
 static pthread_mutex_t sim_fftw_lock = PTHREAD_MUTEX_INITIALIZER;
 
@@ -72,6 +53,9 @@ void ljgap_sim_opts_default(ljgap_sim_opts *o)
     o->progress = NULL;
     o->progress_ctx = NULL;
     o->match_m0 = 1;
+    o->k_split = 0.0;
+    o->law_tol = 1e-6;
+    o->threads = 1;
 }
 
 void ljgap_sim_result_free(ljgap_sim_result *res)
@@ -81,6 +65,7 @@ void ljgap_sim_result_free(ljgap_sim_result *res)
     free(res->sigma);
     free(res->sigma_std);
     free(res->sigma_err);
+    free(res->sigma_each);
     free(res->sigma_out);
     free(res->residual);
     free(res->jump);
@@ -88,334 +73,27 @@ void ljgap_sim_result_free(ljgap_sim_result *res)
     memset(res, 0, sizeof *res);
 }
 
-/* ---- workspace ---- */
-
-typedef struct {
-    int n;
-    size_t N, nc;  /* real points, complex (half-spectrum) points */
-    double L, dq;  /* side, lattice spacing in q */
-    double *kappa; /* stiffness (3√3/2)|q| per complex index (0 at q = 0) */
-    double *qabs;  /* |q| per complex index */
-    double *h, *u, *Ku, *g, *sig, *s, *G, *d, *Kd, *r, *z, *p, *Hp, *ubak;
-    fftw_complex *c; /* scratch spectrum */
-    fftw_plan fwd, bwd;
-    /* run control */
-    const ljgap_sim_opts *o;
-    double deadline;
-    long iter;   /* Hessian products at the current requested gap */
-    int negcurv; /* negative curvature met since last cleared */
-} sim_ws;
-
-static void ws_free(sim_ws *w)
-{
-    double **arr[] = {&w->kappa, &w->qabs, &w->h,  &w->u, &w->Ku, &w->g, &w->sig, &w->s,
-                      &w->G,     &w->d,    &w->Kd, &w->r, &w->z,  &w->p, &w->Hp,  &w->ubak};
-    for (size_t i = 0; i < sizeof arr / sizeof arr[0]; i++) {
-        fftw_free(*arr[i]);
-        *arr[i] = NULL;
-    }
-    fftw_free(w->c);
-    w->c = NULL;
-    pthread_mutex_lock(&sim_fftw_lock);
-    if (w->fwd) fftw_destroy_plan(w->fwd);
-    if (w->bwd) fftw_destroy_plan(w->bwd);
-    pthread_mutex_unlock(&sim_fftw_lock);
-    w->fwd = w->bwd = NULL;
-}
-
-static int ws_alloc(sim_ws *w, int n, double L)
-{
-    memset(w, 0, sizeof *w);
-    w->n = n;
-    w->N = (size_t)n * (size_t)n;
-    w->nc = (size_t)n * (size_t)(n / 2 + 1);
-    w->L = L;
-    w->dq = 2.0 * M_PI / L;
-    double **real[] = {&w->h, &w->u,  &w->Ku, &w->g, &w->sig, &w->s,  &w->G,
-                       &w->d, &w->Kd, &w->r,  &w->z, &w->p,   &w->Hp, &w->ubak};
-    for (size_t i = 0; i < sizeof real / sizeof real[0]; i++)
-        if (!(*real[i] = fftw_alloc_real(w->N))) return LJGAP_ENOMEM;
-    if (!(w->kappa = fftw_alloc_real(w->nc)) || !(w->qabs = fftw_alloc_real(w->nc)) ||
-        !(w->c = fftw_alloc_complex(w->nc)))
-        return LJGAP_ENOMEM;
-    pthread_mutex_lock(&sim_fftw_lock);
-    w->fwd = fftw_plan_dft_r2c_2d(n, n, w->h, w->c, FFTW_ESTIMATE);
-    w->bwd = fftw_plan_dft_c2r_2d(n, n, w->c, w->h, FFTW_ESTIMATE);
-    pthread_mutex_unlock(&sim_fftw_lock);
-    if (!w->fwd || !w->bwd) return LJGAP_ENOMEM;
-    int nh = n / 2 + 1;
-    for (int j = 0; j < n; j++) {
-        int jj = j <= n / 2 ? j : j - n;
-        for (int i = 0; i < nh; i++) {
-            double q = w->dq * hypot((double)i, (double)jj);
-            w->qabs[(size_t)j * nh + i] = q;
-            w->kappa[(size_t)j * nh + i] = SIM_A * q;
-        }
-    }
-    return LJGAP_OK;
-}
-
-/* out = F^-1[ mult(q) F[in] ] with mult = kappa (op 0) or 1/(kappa + c) (op 1); q = 0 -> 0. */
-static void ws_filter(sim_ws *w, const double *in, double *out, int op, double c)
-{
-    fftw_execute_dft_r2c(w->fwd, (double *)in, w->c);
-    double inv = 1.0 / (double)w->N;
-    for (size_t k = 1; k < w->nc; k++) {
-        double m = op == 0 ? w->kappa[k] : 1.0 / (w->kappa[k] + c);
-        w->c[k][0] *= m * inv;
-        w->c[k][1] *= m * inv;
-    }
-    w->c[0][0] = w->c[0][1] = 0.0;
-    fftw_execute_dft_c2r(w->bwd, w->c, out);
-}
-
-static double dot(const double *a, const double *b, size_t N)
-{
-    double s = 0.0;
-    for (size_t i = 0; i < N; i++)
-        s += a[i] * b[i];
-    return s;
-}
-
-static double mean(const double *a, size_t N)
-{
-    double s = 0.0;
-    for (size_t i = 0; i < N; i++)
-        s += a[i];
-    return s / (double)N;
-}
-
-static double lj_dsigma(double g)
-{
-    double g2 = 1.0 / (g * g), g4 = g2 * g2, g10 = g4 * g4 * g2;
-    return SIM_A * (9.0 * g10 - 3.0 * g4);
-}
-
-/* One realization into w->h: random phases (GSL mt19937, seed), amplitudes from the PSD on
- * the lattice, scaled to the PSD's m0 when match. Writes the unscaled lattice variance.
- * The phases are drawn over the band's lattice points |i|,|j| <= k2/dq in an order that does
- * not involve n, so one seed gives the same surface on every grid that resolves the band
- * (a convergence study in n sees the discretization alone). Modes on the Nyquist lines
- * (|i| or |j| = n/2) would alias and are left out; they lie at |q| >= pi n/L >= k2. */
-static int make_surface(sim_ws *w, const ljgap_psd *psd, unsigned long seed, int match,
-                        double *m0_grid)
-{
-    gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
-    if (!rng) return LJGAP_ENOMEM;
-    gsl_rng_set(rng, seed);
-    int n = w->n, nh = n / 2 + 1, M = (int)floor(psd->k2 / w->dq);
-    double var = 0.0;
-    memset(w->c, 0, w->nc * sizeof w->c[0]);
-    for (int j = -M; j <= M; j++) {
-        for (int i = 0; i <= M; i++) {
-            if (i == 0 && j <= 0) continue; /* the other half plane holds the conjugates */
-            double phi = 2.0 * M_PI * gsl_rng_uniform(rng);
-            double a = sqrt(ljgap_psd_eval(psd, w->dq * hypot(i, j))) * w->dq;
-            if (a == 0.0 || i >= n / 2 || abs(j) >= n / 2) continue;
-            int jr = j < 0 ? j + n : j;
-            size_t k = (size_t)jr * nh + i;
-            w->c[k][0] = a * cos(phi), w->c[k][1] = a * sin(phi);
-            if (i == 0) { /* the column i = 0 holds its own conjugates */
-                size_t kc = (size_t)(n - jr) * nh;
-                w->c[kc][0] = a * cos(phi), w->c[kc][1] = -a * sin(phi);
-            }
-            var += 2.0 * a * a;
-        }
-    }
-    gsl_rng_free(rng);
-    *m0_grid = var;
-    if (!(var > 0.0)) return LJGAP_EINVAL;
-    double scale = match ? sqrt(psd->m0 / var) : 1.0;
-    for (size_t k = 0; k < w->nc; k++)
-        w->c[k][0] *= scale, w->c[k][1] *= scale;
-    fftw_execute_dft_c2r(w->bwd, w->c, w->h);
-    double mh = mean(w->h, w->N);
-    for (size_t i = 0; i < w->N; i++)
-        w->h[i] -= mh; /* round-off only */
-    return LJGAP_OK;
-}
-
-static int ws_stop(sim_ws *w)
-{
-    if (w->o->cancel && *w->o->cancel) return LJGAP_ECANCEL;
-    if (ljgap_now() > w->deadline) return LJGAP_ECAP;
-    return LJGAP_OK;
-}
-
-/* Gap, traction, stiffness and force balance at u (w->Ku must hold K u). Returns rms G and
- * writes <σ> and the rms of σ. Fails (returns -1) when a gap is not positive. */
-static double ws_eval(sim_ws *w, double gbar, double *sbar, double *srms)
-{
-    size_t N = w->N;
-    double ss = 0.0, s2 = 0.0;
-    for (size_t i = 0; i < N; i++) {
-        double g = gbar + w->h[i] + w->u[i];
-        if (!(g > 0.0)) return -1.0;
-        w->g[i] = g;
-        w->sig[i] = ljgap_sigma(g);
-        w->s[i] = lj_dsigma(g);
-        ss += w->sig[i];
-        s2 += w->sig[i] * w->sig[i];
-    }
-    double m = ss / (double)N;
-    for (size_t i = 0; i < N; i++)
-        w->G[i] = w->Ku[i] + w->sig[i] - m;
-    *sbar = m;
-    *srms = sqrt(s2 / (double)N);
-    return sqrt(dot(w->G, w->G, N) / (double)N);
-}
-
-/* H v = K v + s v - <s v> (zero-mean v). */
-static void ws_hess(sim_ws *w, const double *v, double *out)
-{
-    ws_filter(w, v, out, 0, 0.0);
-    double m = 0.0;
-    for (size_t i = 0; i < w->N; i++)
-        m += w->s[i] * v[i];
-    m /= (double)w->N;
-    for (size_t i = 0; i < w->N; i++)
-        out[i] += w->s[i] * v[i] - m;
-}
-
-/* PCG for H d = -G to |r| <= eta |G|; d = 0 start. Returns a status (stop checks). */
-static int ws_cg(sim_ws *w, double eta, double c)
-{
-    size_t N = w->N;
-    for (size_t i = 0; i < N; i++)
-        w->d[i] = 0.0, w->r[i] = -w->G[i];
-    double r0 = sqrt(dot(w->r, w->r, N)), target = eta * r0;
-    ws_filter(w, w->r, w->z, 1, c);
-    memcpy(w->p, w->z, N * sizeof *w->p);
-    double rz = dot(w->r, w->z, N);
-    for (int it = 0; it < SIM_CG_MAX; it++) {
-        int st = ws_stop(w);
-        if (st) return st;
-        ws_hess(w, w->p, w->Hp);
-        w->iter++;
-        double pHp = dot(w->p, w->Hp, N);
-        if (!(pHp > 0.0)) {
-            w->negcurv = 1;
-            if (it == 0) memcpy(w->d, w->z, N * sizeof *w->d); /* preconditioned gradient */
-            return LJGAP_OK;
-        }
-        double a = rz / pHp;
-        for (size_t i = 0; i < N; i++)
-            w->d[i] += a * w->p[i], w->r[i] -= a * w->Hp[i];
-        if (sqrt(dot(w->r, w->r, N)) <= target || w->iter >= w->o->max_iter) return LJGAP_OK;
-        ws_filter(w, w->r, w->z, 1, c);
-        double rz1 = dot(w->r, w->z, N), b = rz1 / rz;
-        rz = rz1;
-        for (size_t i = 0; i < N; i++)
-            w->p[i] = w->z[i] + b * w->p[i];
-    }
-    return LJGAP_OK;
-}
-
-/* Energy change E(u + a d) - E(u) per point; +INFINITY when a gap would not be positive. */
-static double ws_dE(sim_ws *w, double a, double dKu, double dKd)
-{
-    double s = 0.0;
-    for (size_t i = 0; i < w->N; i++) {
-        double g1 = w->g[i] + a * w->d[i];
-        if (!(g1 > 0.0)) return INFINITY;
-        s += ljgap_sigma_work(w->g[i]) - ljgap_sigma_work(g1);
-    }
-    return a * dKu + 0.5 * a * a * dKd + s / (double)w->N;
-}
-
-typedef struct {
-    double sigma;    /* <σ> */
-    double residual; /* rms G / max(1, rms σ) */
-    double srms_s;   /* rms of σ' (for the error estimate) */
-} sim_point;
-
-/* Solves at mean gap gbar from the current u. Returns LJGAP_OK (pt filled; residual may
- * exceed tol when max_iter ran out), SIM_STALL, or a stop status. */
-static int ws_solve(sim_ws *w, double gbar, sim_point *pt)
-{
-    size_t N = w->N;
-    double mu = mean(w->u, N);
-    for (size_t i = 0; i < N; i++)
-        w->u[i] -= mu;
-    ws_filter(w, w->u, w->Ku, 0, 0.0);
-    for (int k = 0;; k++) {
-        double sbar, srms, grms = ws_eval(w, gbar, &sbar, &srms);
-        if (grms < 0.0) return SIM_STALL;
-        double scale = srms > 1.0 ? srms : 1.0;
-        if (grms <= w->o->tol * scale || k >= SIM_NEWTON_MAX || w->iter >= w->o->max_iter) {
-            pt->sigma = sbar;
-            pt->residual = grms / scale;
-            pt->srms_s = sqrt(dot(w->s, w->s, N) / (double)N);
-            return LJGAP_OK;
-        }
-        double c = 0.0;
-        for (size_t i = 0; i < N; i++)
-            c += w->s[i] > 0.0 ? w->s[i] : 0.0;
-        c /= (double)N;
-        double eta = sqrt(grms / scale);
-        int st = ws_cg(w, eta < 0.1 ? eta : 0.1, c);
-        if (st) return st;
-        double slope = dot(w->G, w->d, N) / (double)N;
-        if (!(slope < 0.0)) { /* not a descent direction: fall back to -M^-1 G */
-            ws_filter(w, w->G, w->d, 1, c);
-            for (size_t i = 0; i < N; i++)
-                w->d[i] = -w->d[i];
-            slope = dot(w->G, w->d, N) / (double)N;
-            if (!(slope < 0.0)) return SIM_STALL;
-        }
-        ws_filter(w, w->d, w->Kd, 0, 0.0);
-        double dKu = dot(w->d, w->Ku, N) / (double)N, dKd = dot(w->d, w->Kd, N) / (double)N;
-        /* round-off floor of the energy difference */
-        double floor_e = 0.0;
-        for (size_t i = 0; i < N; i += 7)
-            floor_e += fabs(ljgap_sigma_work(w->g[i]));
-        floor_e *= 7.0 / (double)N * 64.0 * 2.2e-16;
-        double a = 1.0;
-        int ok = 0;
-        for (int ls = 0; ls < 60; ls++, a *= 0.5) {
-            double dE = ws_dE(w, a, dKu, dKd);
-            if (dE <= 1e-4 * a * slope + floor_e) {
-                ok = 1;
-                break;
-            }
-        }
-        if (!ok) return SIM_STALL;
-        for (size_t i = 0; i < N; i++)
-            w->u[i] += a * w->d[i], w->Ku[i] += a * w->Kd[i];
-        if (k % 8 == 7) ws_filter(w, w->u, w->Ku, 0, 0.0); /* refresh against drift */
-    }
-}
-
-/* Moves the solution from mean gap *gcur to gt in feasible substeps; pt holds the answer at
- * gt. */
-static int ws_goto(sim_ws *w, double *gcur, double gt, sim_point *pt)
-{
-    size_t N = w->N;
-    double frac = SIM_STEP_FRAC;
-    while (1) {
-        double gmin = INFINITY;
-        for (size_t i = 0; i < N; i++) {
-            double g = *gcur + w->h[i] + w->u[i];
-            if (g < gmin) gmin = g;
-        }
-        double step = frac * gmin, gn = gt;
-        if (fabs(gt - *gcur) > step) gn = *gcur + (gt > *gcur ? step : -step);
-        memcpy(w->ubak, w->u, N * sizeof *w->u);
-        int st = ws_solve(w, gn, pt);
-        if (st == SIM_STALL) {
-            memcpy(w->u, w->ubak, N * sizeof *w->u);
-            frac *= 0.5;
-            if (frac < 1e-6) return LJGAP_EFAIL;
-            continue;
-        }
-        if (st) return st;
-        *gcur = gn;
-        if (gn == gt) return LJGAP_OK;
-        if (frac < SIM_STEP_FRAC) frac *= 2.0;
-    }
-}
-
 /* ---- input checks ---- */
+
+/* The grid must carry wavenumbers up to k (k2, or k_split for the hybrid). */
+static int check_resolved(const char *what, double k, int n, double L, ljgap_warnings *w)
+{
+    double kmax = M_PI * n / L;
+    if (k <= kmax * (1.0 + 1e-12)) return LJGAP_OK;
+    double nneed = ceil(k * L / M_PI);
+    if (fmod(nneed, 2.0) != 0.0) nneed += 1.0;
+    if (nneed <= LJGAP_SIM_N_MAX)
+        ljgap_warn(w,
+                   "simulation: the grid does not resolve %s = %g (Nyquist pi*n/L = %g); "
+                   "n >= %.0f would do",
+                   what, k, kmax, nneed);
+    else
+        ljgap_warn(w,
+                   "simulation: the grid cannot resolve %s = %g with L = %g: it needs n >= "
+                   "%.0f > %d; take a smaller L",
+                   what, k, L, nneed, LJGAP_SIM_N_MAX);
+    return LJGAP_EINVAL;
+}
 
 static int check_inputs(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g_ave,
                         size_t n_gap, double *L, ljgap_warnings *w)
@@ -424,8 +102,26 @@ static int check_inputs(const ljgap_psd *psd, const ljgap_sim_opts *o, const dou
         ljgap_warn(w, "simulation: the PSD and the options are required");
         return LJGAP_EINVAL;
     }
-    if (!(psd->k1 > 0.0) || !isfinite(psd->k2) || !(psd->k2 > psd->k1) || psd->k2 > LJGAP_K_MAX) {
-        ljgap_warn(w, "simulation: the PSD must be band-limited, 0 < k1 < k2 <= %g", LJGAP_K_MAX);
+    const double ks = o->k_split;
+    const int hybrid = ks > 0.0 && ks < psd->k2;
+    if (!(ks == 0.0 || (ks >= psd->k1 && ks <= LJGAP_K_MAX))) {
+        ljgap_warn(w, "simulation: k_split must be 0 (none) or in [k1, %g] = [%g, %g]", LJGAP_K_MAX,
+                   psd->k1, LJGAP_K_MAX);
+        return LJGAP_EINVAL;
+    }
+    if (!(psd->k1 > 0.0) || !(psd->k2 > psd->k1) || (!hybrid && !isfinite(psd->k2)) ||
+        (isfinite(psd->k2) && psd->k2 > LJGAP_K_MAX)) {
+        ljgap_warn(w,
+                   "simulation: the PSD must be band-limited, 0 < k1 < k2 <= %g (k2 may be "
+                   "infinite for the hybrid, with k_split)",
+                   LJGAP_K_MAX);
+        return LJGAP_EINVAL;
+    }
+    if (hybrid && !(ks > ljgap_k0())) {
+        ljgap_warn(w,
+                   "simulation: the fine band's statistical law needs k_split > k0 = %.5f (19): "
+                   "below it the gap transfer (14) has a pole",
+                   ljgap_k0());
         return LJGAP_EINVAL;
     }
     if (!(psd->m0 > 0.0) || psd->m0 > LJGAP_M0_MAX) {
@@ -441,8 +137,17 @@ static int check_inputs(const ljgap_psd *psd, const ljgap_sim_opts *o, const dou
                    LJGAP_SIM_REALIZATIONS_MAX, o->realizations);
         return LJGAP_EINVAL;
     }
+    if (o->threads < 1 || o->threads > LJGAP_SIM_THREADS_MAX) {
+        ljgap_warn(w, "simulation: threads must be in [1, %d] (got %d)", LJGAP_SIM_THREADS_MAX,
+                   o->threads);
+        return LJGAP_EINVAL;
+    }
     if (!(o->tol >= 1e-14 && o->tol <= 1e-2)) {
         ljgap_warn(w, "simulation: tol must be in [1e-14, 1e-2]");
+        return LJGAP_EINVAL;
+    }
+    if (hybrid && !(o->law_tol >= 1e-10 && o->law_tol <= 1e-2)) {
+        ljgap_warn(w, "simulation: law_tol must be in [1e-10, 1e-2]");
         return LJGAP_EINVAL;
     }
     if (o->max_iter < 1 || !(o->max_seconds > 0.0) || !isfinite(o->max_seconds)) {
@@ -458,22 +163,9 @@ static int check_inputs(const ljgap_psd *psd, const ljgap_sim_opts *o, const dou
                    Lmin, 1e4 * Lmin);
         return LJGAP_EINVAL;
     }
-    double kmax = M_PI * o->n / *L;
-    if (psd->k2 > kmax * (1.0 + 1e-12)) {
-        double nneed = ceil(psd->k2 * *L / M_PI);
-        if (fmod(nneed, 2.0) != 0.0) nneed += 1.0;
-        if (nneed <= LJGAP_SIM_N_MAX)
-            ljgap_warn(w,
-                       "simulation: the grid does not resolve k2 = %g (Nyquist pi*n/L = %g); "
-                       "n >= %.0f would do",
-                       psd->k2, kmax, nneed);
-        else
-            ljgap_warn(w,
-                       "simulation: the grid cannot resolve k2 = %g with L = %g: it needs n >= "
-                       "%.0f > %d; take a smaller L",
-                       psd->k2, *L, nneed, LJGAP_SIM_N_MAX);
-        return LJGAP_EINVAL;
-    }
+    int st = hybrid ? check_resolved("k_split", ks, o->n, *L, w)
+                    : check_resolved("k2", psd->k2, o->n, *L, w);
+    if (st) return st;
     if (n_gap < 1 || n_gap > LJGAP_SIM_GAPS_MAX || !g_ave) {
         ljgap_warn(w, "simulation: between 1 and %d mean gaps are needed", LJGAP_SIM_GAPS_MAX);
         return LJGAP_EINVAL;
@@ -488,6 +180,102 @@ static int check_inputs(const ljgap_psd *psd, const ljgap_sim_opts *o, const dou
 }
 
 /* ---- the run ---- */
+
+/* Everything the realizations of one run share, and their separate outputs. */
+typedef struct {
+    sim_shared sh;
+    sim_band band;
+    const double *g_ave;
+    size_t n_gap;
+    const size_t *order; /* gap indices, largest gap first */
+    int R, passes;       /* realizations; 1 (convex: inward only) or 2 (in and back out) */
+    atomic_int abort;    /* first failure's status: the other realizations stop */
+    pthread_mutex_t lock;
+    int next;           /* next realization to take (under lock) */
+    double done, total; /* gap solves done / to do, for progress (under lock) */
+    double lam;         /* energy curvature bound for the residual's effect */
+    /* per realization r: slots [r * n_gap, (r+1) * n_gap) */
+    double *sin_, *sout, *resid, *eres, *elaw;
+    int *jump;
+    double *m0_realized, *m0_grid, *law_max, *g_min;
+    int *unconverged;
+    int *status;          /* status of each realization */
+    ljgap_warnings *warn; /* warnings of each realization */
+} sim_run;
+
+static int run_realization(sim_run *run, sim_ws *ws, int r)
+{
+    const ljgap_sim_opts *o = run->sh.o;
+    const size_t ng = run->n_gap;
+    ljgap_warnings *w = &run->warn[r];
+    int st = sim_ws_surface(ws, &run->band, o->seed + (unsigned long)r, &run->m0_grid[r]);
+    if (st) {
+        if (st == LJGAP_EINVAL)
+            ljgap_warn(w, "simulation: the grid's wavevectors carry none of the PSD");
+        return st;
+    }
+    double hh = 0.0;
+    for (size_t i = 0; i < ws->N; i++)
+        hh += ws->h[i] * ws->h[i];
+    run->m0_realized[r] = hh / (double)ws->N;
+    double gcur;
+    sim_ws_start(ws, run->g_ave[run->order[0]], &gcur);
+    run->g_min[r] = INFINITY;
+    for (int pass = 0; pass < run->passes; pass++) {
+        for (size_t jj = 0; jj < ng; jj++) {
+            size_t idx = pass == 0 ? run->order[jj] : run->order[ng - 1 - jj], k = r * ng + idx;
+            sim_point pt;
+            ws->iter = 0;
+            ws->negcurv = 0;
+            st = sim_ws_goto(ws, &gcur, run->g_ave[idx], &pt);
+            if (st == LJGAP_EFAIL)
+                ljgap_warn(w, "simulation: the solver stalled at g_ave = %g", run->g_ave[idx]);
+            if (st) return st;
+            if (pt.residual > o->tol) run->unconverged[r] = 1;
+            if (pass == 0) {
+                run->sin_[k] = pt.sigma;
+                if (run->passes == 2 && jj > 0 && ws->negcurv) run->jump[k] = 1;
+            } else {
+                run->sout[k] = pt.sigma;
+            }
+            run->resid[k] = fmax(run->resid[k], pt.residual);
+            run->eres[k] =
+                fmax(run->eres[k], pt.srms_s * pt.residual * fmax(1.0, fabs(pt.sigma)) / run->lam);
+            run->elaw[k] = fmax(run->elaw[k], pt.law_err);
+            run->law_max[r] = fmax(run->law_max[r], pt.law_max);
+            run->g_min[r] = fmin(run->g_min[r], pt.g_min);
+            pthread_mutex_lock(&run->lock);
+            run->done += 1.0;
+            if (o->progress) o->progress(o->progress_ctx, run->done / run->total);
+            pthread_mutex_unlock(&run->lock);
+        }
+    }
+    if (run->passes == 1) memcpy(run->sout + r * ng, run->sin_ + r * ng, ng * sizeof(double));
+    return LJGAP_OK;
+}
+
+/* A thread: takes realizations until none is left or one has failed. */
+static void *worker(void *arg)
+{
+    sim_run *run = arg;
+    sim_ws ws;
+    int st = sim_ws_alloc(&ws, &run->sh);
+    for (;;) {
+        pthread_mutex_lock(&run->lock);
+        int r = run->next < run->R && !atomic_load(&run->abort) ? run->next++ : -1;
+        pthread_mutex_unlock(&run->lock);
+        if (r < 0) break;
+        if (!st) st = run_realization(run, &ws, r);
+        run->status[r] = st;
+        if (st) {
+            int zero = 0;
+            atomic_compare_exchange_strong(&run->abort, &zero, st);
+            break;
+        }
+    }
+    sim_ws_free(&ws);
+    return NULL;
+}
 
 /* order[] = indices of g in decreasing order (insertion sort: at most GAPS_MAX entries). */
 static void sort_desc(const double *g, size_t n, size_t *order)
@@ -507,14 +295,116 @@ static int result_alloc(ljgap_sim_result *res, size_t ng, int R)
     res->sigma = calloc(ng, sizeof(double));
     res->sigma_std = calloc(ng, sizeof(double));
     res->sigma_err = calloc(ng, sizeof(double));
+    res->sigma_each = calloc(ng * (size_t)R, sizeof(double));
     res->sigma_out = calloc(ng, sizeof(double));
     res->residual = calloc(ng, sizeof(double));
     res->jump = calloc(ng, sizeof(int));
     res->m0_realized = calloc((size_t)R, sizeof(double));
-    if (!res->g_ave || !res->sigma || !res->sigma_std || !res->sigma_err || !res->sigma_out ||
-        !res->residual || !res->jump || !res->m0_realized)
+    if (!res->g_ave || !res->sigma || !res->sigma_std || !res->sigma_err || !res->sigma_each ||
+        !res->sigma_out || !res->residual || !res->jump || !res->m0_realized)
         return LJGAP_ENOMEM;
     return LJGAP_OK;
+}
+
+static void run_free(sim_run *run)
+{
+    free(run->sin_);
+    free(run->sout);
+    free(run->resid);
+    free(run->eres);
+    free(run->elaw);
+    free(run->jump);
+    free(run->m0_realized);
+    free(run->m0_grid);
+    free(run->law_max);
+    free(run->g_min);
+    free(run->unconverged);
+    free(run->status);
+    free(run->warn);
+    pthread_mutex_lock(&sim_fftw_lock);
+    if (run->sh.fwd) fftw_destroy_plan(run->sh.fwd);
+    if (run->sh.bwd) fftw_destroy_plan(run->sh.bwd);
+    pthread_mutex_unlock(&sim_fftw_lock);
+}
+
+static int run_alloc(sim_run *run, size_t ng, int R)
+{
+    size_t m = ng * (size_t)R;
+    run->sin_ = calloc(m, sizeof(double));
+    run->sout = calloc(m, sizeof(double));
+    run->resid = calloc(m, sizeof(double));
+    run->eres = calloc(m, sizeof(double));
+    run->elaw = calloc(m, sizeof(double));
+    run->jump = calloc(m, sizeof(int));
+    run->m0_realized = calloc((size_t)R, sizeof(double));
+    run->m0_grid = calloc((size_t)R, sizeof(double));
+    run->law_max = calloc((size_t)R, sizeof(double));
+    run->g_min = calloc((size_t)R, sizeof(double));
+    run->unconverged = calloc((size_t)R, sizeof(int));
+    run->status = calloc((size_t)R, sizeof(int));
+    run->warn = calloc((size_t)R, sizeof(ljgap_warnings));
+    if (!run->sin_ || !run->sout || !run->resid || !run->eres || !run->elaw || !run->jump ||
+        !run->m0_realized || !run->m0_grid || !run->law_max || !run->g_min || !run->unconverged ||
+        !run->status || !run->warn)
+        return LJGAP_ENOMEM;
+    /* plans on scratch arrays of the workspaces' alignment (FFTW_ESTIMATE touches no data) */
+    int n = run->sh.n;
+    double *a = fftw_alloc_real((size_t)n * n);
+    fftw_complex *c = fftw_alloc_complex((size_t)n * (n / 2 + 1));
+    if (a && c) {
+        pthread_mutex_lock(&sim_fftw_lock);
+        run->sh.fwd = fftw_plan_dft_r2c_2d(n, n, a, c, FFTW_ESTIMATE);
+        run->sh.bwd = fftw_plan_dft_c2r_2d(n, n, c, a, FFTW_ESTIMATE);
+        pthread_mutex_unlock(&sim_fftw_lock);
+    }
+    fftw_free(a);
+    fftw_free(c);
+    return run->sh.fwd && run->sh.bwd ? LJGAP_OK : LJGAP_ENOMEM;
+}
+
+/* The Lennard-Jones law's own adhesion summary (exact): the modified law of an empty band. */
+static void lj_summary(ljgap_summary *s)
+{
+    memset(s, 0, sizeof *s);
+    s->g_eq.value = 1.0;
+    s->sigma_max.value = 1.0;
+    s->g_at_max.value = ljgap_g_sigma_max();
+    s->dgamma_eff.value = 1.0;
+    s->k0 = ljgap_k0();
+}
+
+/* The interface law of the run: Lennard-Jones, or the statistical law of the band above
+ * k_split (res gets its summary). */
+static int make_law(const ljgap_psd *psd, const ljgap_sim_opts *o, double deadline, sim_law *law,
+                    ljgap_sim_result *res, ljgap_warnings *w)
+{
+    sim_law_lj(law);
+    if (o->k_split == 0.0) return LJGAP_OK;
+    res->k_split = o->k_split;
+    if (o->k_split >= psd->k2) {
+        lj_summary(&res->fine);
+        return LJGAP_OK;
+    }
+    /* the band above k_split (k_split = k1: the whole PSD) */
+    ljgap_psd above = {0};
+    const ljgap_psd *fine = psd;
+    if (o->k_split > psd->k1) {
+        int st = ljgap_psd_above(&above, psd, o->k_split);
+        if (st) return st;
+        fine = &above;
+    }
+    ljgap_opts po;
+    ljgap_opts_default(&po);
+    po.tol = o->law_tol;
+    po.max_seconds = deadline - ljgap_now();
+    po.cancel = o->cancel;
+    int st = po.max_seconds > 0 ? sim_law_fine(law, fine, &po, w) : LJGAP_ECAP;
+    if (!st) {
+        res->m0_fine = fine->m0;
+        res->fine = law->sum;
+    }
+    ljgap_psd_free(&above);
+    return st;
 }
 
 int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g_ave, size_t n_gap,
@@ -529,85 +419,98 @@ int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g
     int st = check_inputs(psd, o, g_ave, n_gap, &L, w);
     if (st) return st;
     const int R = o->realizations;
-    const int convex = 2.0 * M_PI / L > ljgap_k0();
+    const int hybrid = o->k_split > 0.0 && o->k_split < psd->k2;
+    sim_law law;
+    sim_run run;
+    memset(&run, 0, sizeof run);
+    pthread_mutex_init(&run.lock, NULL);
+    atomic_init(&run.abort, 0);
     size_t *order = malloc(n_gap * sizeof *order);
-    double *sin_ = malloc(n_gap * (size_t)R * sizeof(double));
-    double *sout = malloc(n_gap * (size_t)R * sizeof(double));
-    double *eres = calloc(n_gap, sizeof(double)); /* residual effect on sigma, worst case */
-    sim_ws ws;
-    int wst = ws_alloc(&ws, o->n, L);
-    st = result_alloc(res, n_gap, R);
-    if (!order || !sin_ || !sout || !eres || wst || st) {
+    pthread_t *tid = NULL;
+    int started = 0;
+    run.sh.n = o->n;
+    run.sh.L = L;
+    run.sh.dq = 2.0 * M_PI / L;
+    run.sh.o = o;
+    run.sh.deadline = t0 + o->max_seconds;
+    run.sh.abort = &run.abort;
+    run.sh.law = &law;
+    sim_law_lj(&law);
+    if (!order || run_alloc(&run, n_gap, R) || result_alloc(res, n_gap, R)) {
         st = LJGAP_ENOMEM;
         goto end;
     }
-    ws.o = o;
-    ws.deadline = t0 + o->max_seconds;
+    st = make_law(psd, o, run.sh.deadline, &law, res, w);
+    if (st) goto end;
+    run.band.psd = psd;
+    run.band.k_top = hybrid ? o->k_split : psd->k2;
+    run.band.m0 = hybrid ? ljgap_psd_cumvar(psd, o->k_split) : psd->m0;
+    run.band.match = o->match_m0;
+    run.g_ave = g_ave;
+    run.n_gap = n_gap;
+    run.order = order;
+    run.R = R;
     sort_desc(g_ave, n_gap, order);
+    /* the smallest curvature of the energy: (3√3/2)|q|min + min σ' (simsolve.c) */
+    const double kq = SIM_A * run.sh.dq, curv = kq + law.s_min;
+    run.passes = curv > 0.0 ? 1 : 2;
+    run.lam = fmax(curv, 0.1 * kq);
+    run.total = (double)R * (double)n_gap * run.passes;
+    /* the realizations, on up to opts.threads threads (this one included) */
+    int T = o->threads < R ? o->threads : R;
+    if (T > 1 && !(tid = calloc((size_t)T - 1, sizeof *tid))) {
+        st = LJGAP_ENOMEM;
+        goto end;
+    }
+    for (int t = 0; t + 1 < T; t++) {
+        if (pthread_create(&tid[t], NULL, worker, &run)) break;
+        started++;
+    }
+    worker(&run);
+    for (int t = 0; t < started; t++)
+        pthread_join(tid[t], NULL);
+    st = atomic_load(&run.abort);
+    for (int r = 0; r < R; r++)
+        for (int i = 0; i < run.warn[r].n; i++)
+            ljgap_warn(w, "%s", run.warn[r].msg[i]);
+    if (st) goto end;
+    /* gather */
     res->n_gap = n_gap;
     res->realizations = R;
     res->m0_target = psd->m0;
+    res->m0_grid = run.m0_grid[0];
     res->L = L;
     res->n = o->n;
+    res->g_min = INFINITY;
     memcpy(res->g_ave, g_ave, n_gap * sizeof *g_ave);
-    const double total = (double)R * (double)n_gap * (convex ? 1.0 : 2.0);
-    double done = 0.0;
-    const double lam = SIM_A * fmax(2.0 * M_PI / L - ljgap_k0(), 0.1 * 2.0 * M_PI / L);
+    memcpy(res->m0_realized, run.m0_realized, (size_t)R * sizeof(double));
+    memcpy(res->sigma_each, run.sin_, n_gap * (size_t)R * sizeof(double));
     int unconverged = 0;
     for (int r = 0; r < R; r++) {
-        st = make_surface(&ws, psd, o->seed + (unsigned long)r, o->match_m0, &res->m0_grid);
-        if (st) {
-            ljgap_warn(w, "simulation: the grid's wavevectors carry none of the PSD");
-            goto end;
-        }
-        res->m0_realized[r] = dot(ws.h, ws.h, ws.N) / (double)ws.N;
-        /* cold start: flat elastic surface at a mean gap where every local gap >= 1.5 */
-        double hmin = INFINITY;
-        for (size_t i = 0; i < ws.N; i++)
-            hmin = fmin(hmin, ws.h[i]);
-        double gtop = g_ave[order[0]], gcur = fmax(gtop, SIM_G_START - hmin);
-        memset(ws.u, 0, ws.N * sizeof *ws.u);
-        sim_point pt;
-        for (int pass = 0; pass < (convex ? 1 : 2); pass++) {
-            for (size_t jj = 0; jj < n_gap; jj++) {
-                size_t idx = pass == 0 ? order[jj] : order[n_gap - 1 - jj];
-                ws.iter = 0;
-                ws.negcurv = 0;
-                st = ws_goto(&ws, &gcur, g_ave[idx], &pt);
-                if (st == LJGAP_EFAIL)
-                    ljgap_warn(w, "simulation: the solver stalled at g_ave = %g", g_ave[idx]);
-                if (st) goto end;
-                if (pt.residual > o->tol) unconverged = 1;
-                if (pass == 0) {
-                    sin_[(size_t)r * n_gap + idx] = pt.sigma;
-                    if (!convex && jj > 0 && ws.negcurv) res->jump[idx] = 1;
-                } else {
-                    sout[(size_t)r * n_gap + idx] = pt.sigma;
-                }
-                if (pt.residual > res->residual[idx]) res->residual[idx] = pt.residual;
-                double e = pt.srms_s * pt.residual * fmax(1.0, fabs(pt.sigma)) / lam;
-                if (e > eres[idx]) eres[idx] = e;
-                done += 1.0;
-                if (o->progress) o->progress(o->progress_ctx, done / total);
-            }
-        }
-        if (convex)
-            memcpy(sout + (size_t)r * n_gap, sin_ + (size_t)r * n_gap, n_gap * sizeof(double));
+        unconverged |= run.unconverged[r];
+        res->law_err = fmax(res->law_err, run.law_max[r]);
+        res->g_min = fmin(res->g_min, run.g_min[r]);
     }
     for (size_t i = 0; i < n_gap; i++) {
-        double m = 0.0, mo = 0.0, v = 0.0;
-        for (int r = 0; r < R; r++)
-            m += sin_[(size_t)r * n_gap + i], mo += sout[(size_t)r * n_gap + i];
+        double m = 0.0, mo = 0.0, v = 0.0, eres = 0.0, elaw = 0.0;
+        for (int r = 0; r < R; r++) {
+            size_t k = (size_t)r * n_gap + i;
+            m += run.sin_[k], mo += run.sout[k];
+            res->jump[i] |= run.jump[k];
+            res->residual[i] = fmax(res->residual[i], run.resid[k]);
+            eres = fmax(eres, run.eres[k]);
+            elaw = fmax(elaw, run.elaw[k]);
+        }
         m /= R, mo /= R;
         for (int r = 0; r < R; r++) {
-            double d = sin_[(size_t)r * n_gap + i] - m;
+            double d = run.sin_[(size_t)r * n_gap + i] - m;
             v += d * d;
         }
         double sd = R > 1 ? sqrt(v / (R - 1)) : 0.0;
         res->sigma[i] = m;
         res->sigma_out[i] = mo;
         res->sigma_std[i] = sd;
-        res->sigma_err[i] = sd / sqrt((double)R) + eres[i];
+        res->sigma_err[i] = sd / sqrt((double)R) + eres + elaw;
         if (!isfinite(m) || !isfinite(mo) || !isfinite(res->sigma_err[i])) {
             ljgap_warn(w, "simulation: non-finite traction at g_ave = %g", g_ave[i]);
             st = LJGAP_EFAIL;
@@ -623,18 +526,24 @@ int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g
                    "simulation: the residual target %g was not met everywhere (max_iter = %ld); "
                    "see residual",
                    o->tol, o->max_iter);
-    if (res->m0_grid < 0.95 * psd->m0 || res->m0_grid > 1.05 * psd->m0)
+    if (run.band.m0 > 0.0 &&
+        (res->m0_grid < 0.95 * run.band.m0 || res->m0_grid > 1.05 * run.band.m0))
         ljgap_warn(w,
                    "simulation: the lattice of wavevectors carries m0_grid = %.4g of m0 = %.4g%s",
-                   res->m0_grid, psd->m0,
+                   res->m0_grid, run.band.m0,
                    o->match_m0 ? " (realizations scaled to m0)" : "; a larger L resolves the band");
+    if (hybrid && res->g_min < law.g_lo)
+        ljgap_warn(w,
+                   "hybrid: local gaps down to %g, below the fine band's table (%g): its law was "
+                   "extrapolated there",
+                   res->g_min, law.g_lo);
     st = LJGAP_OK;
 end:
-    ws_free(&ws);
+    sim_law_free(&law);
+    run_free(&run);
+    pthread_mutex_destroy(&run.lock);
+    free(tid);
     free(order);
-    free(sin_);
-    free(sout);
-    free(eres);
     if (st) ljgap_sim_result_free(res);
     return st;
 }

@@ -75,6 +75,7 @@ double ljgap_flat_work(void);       /* 9√3/16 = ∫_1^∞ sigma/sigma0 dg */
  * Valid (relative error < 1e-12) for V/g^2 <= 0.01, g > 0; returns NAN outside. */
 double ljgap_sigma_smoothed(double g, double V);
 double ljgap_sigma_work_smoothed(double g, double V);
+double ljgap_dsigma_smoothed(double g, double V); /* E[sigma'(g+X)], the same range */
 
 /* ---- psd.c: power spectral densities (dimensionless, theory.md §1) ---- */
 typedef enum { LJGAP_PSD_POWER = 0, LJGAP_PSD_TABLE = 1 } ljgap_psd_kind;
@@ -108,6 +109,8 @@ int ljgap_psd_table(ljgap_psd *psd, const double *k, const double *P, size_t n, 
 void ljgap_psd_free(ljgap_psd *psd); /* frees table storage; NULL and power laws are fine */
 /* Copy of psd truncated at kc (k1 < kc; kc >= k2 gives a plain copy). */
 int ljgap_psd_truncate(ljgap_psd *out, const ljgap_psd *psd, double kc);
+/* Copy of psd restricted to k >= kc (k1 < kc < k2): the band above kc, with the same P there. */
+int ljgap_psd_above(ljgap_psd *out, const ljgap_psd *psd, double kc);
 double ljgap_psd_eval(const ljgap_psd *psd, double k);            /* P(k) */
 double ljgap_psd_var(const ljgap_psd *psd, double ka, double kb); /* 2π∫_ka^kb s P ds */
 double ljgap_psd_cumvar(const ljgap_psd *psd, double k);          /* ljgap_psd_var(k1, k) */

@@ -127,8 +127,8 @@ static void comments(ljgap_textbuf *b, const char *prefix, const cJSON *obj, con
         const cJSON *e = cJSON_GetObjectItemCaseSensitive(err, c->string);
         if (!c->string || !strcmp(c->string, "error")) continue;
         snprintf(p, sizeof p, "%s%s%s", prefix, *prefix ? "." : "", c->string);
-        if (cJSON_IsObject(c))
-            comments(b, p, c, e);
+        if (cJSON_IsObject(c)) /* a nested object's errors: beside it, or in its own "error" */
+            comments(b, p, c, e ? e : cJSON_GetObjectItemCaseSensitive(c, "error"));
         else if (cJSON_IsArray(c) && cJSON_IsString(c->child))
             comment_list(b, p, c->string, c);
         else if (!cJSON_IsArray(c))

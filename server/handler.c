@@ -19,12 +19,13 @@
  * its values on up to limits.sweep_threads threads; each value is independent, so the answer
  * is the sequential one.
  *
- * Simulations (the discrete model, ljgap_sim.h) are not an endpoint of ljgap_handle: a run
- * takes minutes. ljgap_sim_request_parse validates like every endpoint (same problems) and
- * builds the PSD; ljgap_sim_request_run runs it under the caller's cancel flag, progress
- * callback and time cap, and serialises the result. The daemon runs them as background jobs
- * (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll of a job, with
- * a finished job's result as CSV when Accept asks for it.
+ * Simulations (the discrete model, ljgap_sim.h, and its hybrid with the theory when the request
+ * has k_split) are not an endpoint of ljgap_handle: a run takes minutes.
+ * ljgap_sim_request_parse validates like every endpoint (same problems) and builds the PSD;
+ * ljgap_sim_request_run runs it under the caller's cancel flag, progress callback and time cap,
+ * its realizations on limits.sim_threads threads, and serialises the result. The daemon runs them
+ * as background jobs (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll
+ * of a job, with a finished job's result as CSV when Accept asks for it.
  *
  * Problem types: the "type" member of every application/problem+json answer is /problems/SLUG,
  * a page the daemon serves; problems.c holds the status, title and text of each (openapi.json
@@ -82,7 +83,7 @@ static char oom_body[] = "{\"type\":\"" LJGAP_PROBLEM_BASE "out-of-memory\","
 #define LIMITS_DEFAULT                                                                             \
     {                                                                                              \
         .max_seconds = 20.0, .max_samples = 1000000, .max_points = 10000, .sweep_threads = 0,      \
-        .cancel = NULL                                                                             \
+        .sim_threads = 0, .cancel = NULL                                                           \
     }
 static const ljgap_limits limits_default = LIMITS_DEFAULT;
 static ljgap_limits limits = LIMITS_DEFAULT; /* written only by ljgap_handler_set_limits */
@@ -92,6 +93,7 @@ void ljgap_limits_default(ljgap_limits *l)
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     *l = limits_default;
     l->sweep_threads = n > 0 ? n : 1;
+    l->sim_threads = 1;
 }
 
 void ljgap_handler_set_limits(const ljgap_limits *l)
@@ -1102,6 +1104,13 @@ static void put_sim_result(job *j, const ljgap_sim_result *r, double t0)
     put(j, j->ans, "elapsed_ms", cJSON_CreateNumber((ljgap_now() - t0) * 1e3));
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "sigma", r->sigma_err, n, sizeof *r->sigma_err, "error.sigma");
+    if (r->k_split > 0) { /* the hybrid: the fine band and its modified law */
+        cJSON *fine;
+        put_num(j, j->ans, "k_split", r->k_split, "k_split", -1);
+        fine = put(j, j->ans, "fine", cJSON_CreateObject());
+        put_summary(j, fine, fine, "error", &r->fine);
+        put_num(j, fine, "law_error", r->law_err, "fine.law_error", -1);
+    }
 }
 
 void ljgap_sim_request_run(ljgap_sim_request *sr, const ljgap_sim_control *ctl, ljgap_reply *out)
@@ -1114,6 +1123,8 @@ void ljgap_sim_request_run(ljgap_sim_request *sr, const ljgap_sim_control *ctl, 
     int st;
     memset(out, 0, sizeof *out);
     memset(&res, 0, sizeof res);
+    long th = limits.sim_threads > 0 ? limits.sim_threads : sysconf(_SC_NPROCESSORS_ONLN);
+    o.threads = th < 1 ? 1 : th > LJGAP_SIM_THREADS_MAX ? LJGAP_SIM_THREADS_MAX : (int)th;
     if (ctl) {
         if (ctl->max_seconds > 0) o.max_seconds = ctl->max_seconds;
         o.cancel = ctl->cancel;

@@ -27,6 +27,11 @@ typedef struct {
                            * cores; 1 computes sequentially); results do not depend on it */
     long max_topo_points; /* cap on the heights of one psd map (default, and when <= 0:
                            * LJGAP_TOPO_POINTS_DEFAULT) */
+    long sim_threads;     /* threads of one simulation run, each computing realizations (<= 0:
+                           * the online cores); results do not depend on it. The handler starts
+                           * with 0 (the CLI's foreground run takes every core); ljgap_limits_default
+                           * gives 1 (a daemon's jobs, --job-workers of them at once, leave the
+                           * other cores to the synchronous endpoints) */
     const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
 } ljgap_limits;
 
@@ -106,7 +111,8 @@ typedef struct {
  * field, 500 out of memory). */
 ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_reply *out);
 /* Runs it (ljgap_sim_run) and fills *out: 200 with the result object (g_ave, sigma,
- * sigma_std, m0_realized, elapsed_ms, error, ... and meta), or a problem. */
+ * sigma_std, m0_realized, elapsed_ms, error, ... and meta; for the hybrid also k_split and
+ * fine), or a problem. */
 void ljgap_sim_request_run(ljgap_sim_request *rq, const ljgap_sim_control *ctl, ljgap_reply *out);
 void ljgap_sim_request_free(ljgap_sim_request *rq); /* NULL is fine */
 

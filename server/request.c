@@ -71,8 +71,8 @@ static const char *const table_fields[] = {"kind", "k", "P", "tail", NULL};
 static const char *const tail_fields[] = {"exponent", NULL};
 static const char *const range_fields[] = {"min", "max", "n", NULL};
 /* A simulation takes the dimensionless psd and its own fields only (no method, material). */
-static const char *const sim_fields[] = {"psd",  "n",     "L",   "realizations",
-                                         "seed", "g_ave", "tol", NULL};
+static const char *const sim_fields[] = {"psd", "n",       "L", "realizations", "seed", "g_ave",
+                                         "tol", "k_split", NULL};
 /* psd: a height map and, optionally, a material (the theory's domain in the answer). */
 static const char *const psd_fields[] = {"topography", "material", NULL};
 static const char *const topo_fields[] = {"heights", "dx", "dy", "periodic", NULL};
@@ -803,37 +803,70 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
     }
 }
 
-/* The band [k1, k2] of a parsed psd into k (NAN where unknown or infinite); the numerical
- * model needs a finite k2: a power law without one, or a table with a tail, is a problem. */
-static void sim_band(ljgap_verr *e, const ljgap_psd_spec *s, double k[2])
+/* The band [k1, k2] of a parsed psd into k (NAN where unknown, k2 INFINITY for a power law
+ * without one or a table with a tail). */
+static void sim_band(const ljgap_psd_spec *s, double k[2])
 {
     k[0] = k[1] = NAN;
     if (s->kind == LJGAP_PSD_POWER) {
         k[0] = s->k1;
         k[1] = s->k2;
-        if (isinf(s->k2))
-            ljgap_verr_add(e, "/psd/k2",
-                           "the numerical model needs a band-limited PSD: give a finite k2 "
-                           "(the grid carries wavenumbers up to πn/L)");
     } else if (s->kind == LJGAP_PSD_TABLE && s->k && s->n > 1) {
         k[0] = s->k[0];
-        k[1] = s->k[s->n - 1];
-        if (s->has_tail)
-            ljgap_verr_add(e, "/psd/tail",
-                           "the numerical model needs a band-limited PSD: drop the tail "
-                           "(the table then ends at its last k)");
+        k[1] = s->has_tail ? INFINITY : s->k[s->n - 1];
     }
     if (!isfinite(k[0])) k[0] = NAN;
-    if (!isfinite(k[1])) k[1] = NAN;
+}
+
+/* The hybrid's k_split: k1 <= k_split <= LJGAP_K_MAX and above k0 (its band's law is the
+ * theory's). Returns the top wavenumber the grid must carry, *name its name: k_split when it is
+ * below k2, else k2, which must then be finite (the plain model), NAN when unknown. */
+static double sim_top(ljgap_verr *e, const cJSON *root, const ljgap_psd_spec *s, const double k[2],
+                      ljgap_sim_opts *o, const char **name)
+{
+    const cJSON *it = member(root, "k_split");
+    double x;
+    int bad = e->n;
+    *name = "k2";
+    if (it && num_pos(e, it, "/k_split", &x)) {
+        if (!isnan(k[0]) && !(x >= k[0]))
+            ljgap_verr_add(e, "/k_split",
+                           "k_split = %g is below k1 = %g: the grid carries [k1, k_split] "
+                           "(k_split = k1 is the theory alone)",
+                           x, k[0]);
+        else if (!(x > ljgap_k0()))
+            ljgap_verr_add(e, "/k_split",
+                           "k_split = %g is at or below k0 = %.5f: the fine band's law (the "
+                           "theory) needs k_split > k0 (19)",
+                           x, ljgap_k0());
+        else if (in_core_range(e, "/k_split", "k_split", x, 0, LJGAP_K_MAX))
+            o->k_split = x;
+    }
+    if (it && e->n > bad) return NAN; /* a bad k_split: the grid is checked once it is fixed */
+    if (o->k_split > 0 && !(o->k_split >= k[1])) {
+        *name = "k_split";
+        return o->k_split;
+    }
+    if (s->kind == LJGAP_PSD_POWER && isinf(k[1]))
+        ljgap_verr_add(e, "/psd/k2",
+                       "the numerical model needs a band-limited PSD: give a finite k2 (the grid "
+                       "carries wavenumbers up to πn/L), or k_split for the hybrid");
+    else if (s->kind == LJGAP_PSD_TABLE && s->has_tail)
+        ljgap_verr_add(e, "/psd/tail",
+                       "the numerical model needs a band-limited PSD: drop the tail (the table "
+                       "then ends at its last k), or give k_split for the hybrid");
+    return isfinite(k[1]) ? k[1] : NAN;
 }
 
 /* The grid of a simulation: n even in [8, LJGAP_SIM_N_MAX], L in [2π/k1, 1e4·2π/k1] (0: 2π/k1),
- * and the Nyquist wavenumber πn/L at or above k2 (the rules of ljgap_sim_run; a grid that
- * misses k2 is reported at /n with the n that would do, or at /psd/k2 when none would). */
-static void parse_sim_grid(ljgap_verr *e, const cJSON *root, const double k[2], ljgap_sim_opts *o)
+ * and the Nyquist wavenumber πn/L at or above top (k2, or k_split for the hybrid: the rules of
+ * ljgap_sim_run; a grid that misses it is reported at /n with the n that would do, or at
+ * /psd/k2 or /k_split when none would). */
+static void parse_sim_grid(ljgap_verr *e, const cJSON *root, double k1, double top,
+                           const char *name, ljgap_sim_opts *o)
 {
     const cJSON *it;
-    double x, Lmin = 2 * M_PI / k[0], L;
+    double x, Lmin = 2 * M_PI / k1, L;
     int ok = 1;
     if ((it = member(root, "n"))) {
         if (!num_int(e, it, "/n", 8, LJGAP_SIM_N_MAX, &x)) {
@@ -856,26 +889,26 @@ static void parse_sim_grid(ljgap_verr *e, const cJSON *root, const double k[2], 
             ok = 0;
         }
     }
-    if (!ok || isnan(Lmin) || isnan(k[1])) return;
+    if (!ok || isnan(Lmin) || isnan(top)) return;
     L = o->L > 0 ? o->L : Lmin;
-    if (k[1] > M_PI * o->n / L * (1 + 1e-12)) {
-        double need = ceil(k[1] * L / M_PI);
+    if (top > M_PI * o->n / L * (1 + 1e-12)) {
+        double need = ceil(top * L / M_PI);
         need += fmod(need, 2);
         if (need <= LJGAP_SIM_N_MAX)
             ljgap_verr_add(e, "/n",
-                           "the grid does not resolve k2 = %g: its highest wavenumber is "
+                           "the grid does not resolve %s = %g: its highest wavenumber is "
                            "πn/L = %g (n = %d, L = %g); n >= %.0f would do",
-                           k[1], M_PI * o->n / L, o->n, L, need);
+                           name, top, M_PI * o->n / L, o->n, L, need);
         else
-            ljgap_verr_add(e, "/psd/k2",
-                           "no grid resolves k2 = %g with L = %g: that needs n >= %.0f, over "
-                           "the cap %d; lower k2 or take a smaller L",
-                           k[1], L, need, LJGAP_SIM_N_MAX);
+            ljgap_verr_add(e, strcmp(name, "k2") ? "/k_split" : "/psd/k2",
+                           "no grid resolves %s = %g with L = %g: that needs n >= %.0f, over "
+                           "the cap %d; lower %s or take a smaller L",
+                           name, top, L, need, LJGAP_SIM_N_MAX, name);
     }
 }
 
-/* A simulation (ljgap_sim.h): grid, realizations, seed, tol and the mean gaps, which are a
- * list or a range as for traction, at most LJGAP_SIM_GAPS_MAX of them. */
+/* A simulation (ljgap_sim.h): k_split (the hybrid), grid, realizations, seed, tol and the mean
+ * gaps, which are a list or a range as for traction, at most LJGAP_SIM_GAPS_MAX of them. */
 static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
                              ljgap_request *rq)
 {
@@ -883,9 +916,11 @@ static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limit
     ljgap_limits gaps = *lim;
     const cJSON *it;
     double x, k[2];
+    const char *top_name;
     ljgap_sim_opts_default(o);
-    sim_band(e, &rq->psd, k);
-    parse_sim_grid(e, root, k, o);
+    sim_band(&rq->psd, k);
+    double top = sim_top(e, root, &rq->psd, k, o, &top_name);
+    parse_sim_grid(e, root, k[0], top, top_name, o);
     if ((it = member(root, "realizations")) &&
         num_int(e, it, "/realizations", 1, LJGAP_SIM_REALIZATIONS_MAX, &x))
         o->realizations = (int)x;

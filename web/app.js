@@ -837,8 +837,9 @@
       common, post, el, list, val, fmt, errFmt, clearErrors, showSeries,
       placeProblem,
       claim: collectClaims,
-      panel: (name, req) => {
-        if (req.endpoint === "simulations") resetPanel(name);
+      /* a simulation starts the panel afresh, unless it is kept beside the previous job */
+      panel: (name, { keep, ...req }) => {
+        if (req.endpoint === "simulations" && !keep) resetPanel(name);
         panels[name].requests.push(req);
       },
     });

@@ -2,8 +2,13 @@
  * {id, status, progress, elapsed_ms}; GET /v1/simulations/ID is polled for progress until the
  * status is done (then "result" holds g_ave[], sigma[], error.sigma[], …), failed or cancelled
  * (then "problem"); DELETE cancels. app.js calls LJJobs.init(api) when /openapi.json lists the
- * endpoint; until then the card stays hidden. The finished run is plotted against the
- * statistical curve of the same PSD (POST /v1/traction over the simulated range), as in Fig. 6.
+ * endpoint; until then the card stays hidden.
+ *
+ * With k̃split the job is the hybrid (the grid carries [k̃1, k̃split], the finer band acts through
+ * the statistical theory); "also the full model" then queues a second job without k̃split on its
+ * own grid, after the first. The finished runs are plotted against the statistical curve of the
+ * same PSD (POST /v1/traction over the simulated range), as in Fig. 6: theory, hybrid and, when
+ * run, the full model, with the largest |hybrid − full| and the time ratio in the readout.
  */
 "use strict";
 
@@ -11,14 +16,16 @@ const LJJobs = (() => {
   const $ = (id) => document.getElementById(id);
   const POLL_MS = 500;
   let api = null; /* LJApp's helpers: common(), post(), el(), problems */
-  let current = null; /* {id, timer} */
+  let current = null; /* {id, timer, cancelled} */
 
   function input(id, label, value, ptr) {
+    const attrs = { id, type: "text", value, "data-panel": "jobs" };
+    if (ptr) attrs["data-ptr"] = ptr;
     return api.el(
       "div",
       { class: "field" },
       api.el("label", { for: id }, label),
-      api.el("input", { id, type: "text", value, "data-ptr": ptr, "data-panel": "jobs" }),
+      api.el("input", attrs),
       api.el("span", { class: "err", "data-for": id })
     );
   }
@@ -31,6 +38,14 @@ const LJJobs = (() => {
       input("sim-real", "realizations", "4", "/realizations"),
       input("sim-seed", "seed", "1", "/seed"),
       input("sim-g", "mean gaps g̃ave (list)", "1.2, 1.5, 2, 2.5, 3, 4", "/g_ave"),
+      input("sim-ksplit", "k̃split (hybrid: the grid carries [k̃1, k̃split], the finer band acts through the theory; empty: the full model)", "", "/k_split"),
+      api.el(
+        "div",
+        { class: "field", id: "sim-full-field" },
+        api.el("label", { for: "sim-full", class: "inline" }, api.el("input", { id: "sim-full", type: "checkbox" }), " also run the full model, on n ="),
+        api.el("input", { id: "sim-nfull", type: "text", value: "128" }),
+        api.el("span", { class: "err", "data-for": "sim-nfull" })
+      ),
       api.el(
         "div",
         { class: "actions" },
@@ -44,23 +59,37 @@ const LJJobs = (() => {
     api.claim(box);
     $("sim-start").addEventListener("click", start);
     $("sim-cancel").addEventListener("click", cancel);
+    $("sim-ksplit").addEventListener("input", sync);
+    sync();
   }
 
-  function request() {
+  function sync() {
+    $("sim-full-field").hidden = api.val($("sim-ksplit").value) === undefined;
+  }
+
+  /* The job's body, and the full model's beside a hybrid when asked (null otherwise). */
+  function requests() {
     const c = api.common();
     const body = { psd: c.psd, g_ave: api.list($("sim-g").value) };
     if (c.material) body.material = c.material;
-    for (const [id, key] of [["sim-L", "L"], ["sim-n", "n"], ["sim-real", "realizations"], ["sim-seed", "seed"]]) {
+    for (const [id, key] of [["sim-L", "L"], ["sim-n", "n"], ["sim-real", "realizations"], ["sim-seed", "seed"], ["sim-ksplit", "k_split"]]) {
       const v = api.val($(id).value);
       if (v !== undefined) body[key] = v;
     }
-    return body;
+    let full = null;
+    if (body.k_split !== undefined && $("sim-full").checked) {
+      full = { ...body };
+      delete full.k_split;
+      const n = api.val($("sim-nfull").value);
+      if (n !== undefined) full.n = n;
+      else delete full.n;
+    }
+    return { body, full };
   }
 
-  function state(s) {
-    $("sim-progress").value = s.progress || 0;
-    $("sim-state").dataset.status = s.status;
-    $("sim-state").textContent = `job ${s.id.slice(0, 8)}…: ${s.status}, ${Math.round(100 * (s.progress || 0))} %, ${api.fmt(s.elapsed_ms / 1000, 3)} s`;
+  /* The job's body (the first job's, for a hybrid with the full model beside it). */
+  function request() {
+    return requests().body;
   }
 
   /* The submission was answered with a problem: beside the fields, and in the job's line. */
@@ -70,85 +99,139 @@ const LJJobs = (() => {
     $("sim-state").dataset.status = "refused";
   }
 
-  async function start() {
-    if (current) return;
-    api.clearErrors();
-    const body = request();
+  function state(s, what) {
+    $("sim-progress").value = s.progress || 0;
+    $("sim-state").dataset.status = s.status;
+    $("sim-state").textContent = `${what} job ${s.id.slice(0, 8)}…: ${s.status}, ${Math.round(100 * (s.progress || 0))} %, ${api.fmt(s.elapsed_ms / 1000, 3)} s`;
+  }
+
+  const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+  /* Submits one job and polls it to its end: {result} when done, else {text} saying why not. */
+  async function runJob(body, what, first) {
     const text = JSON.stringify(body);
-    api.panel("jobs", { endpoint: "simulations", text });
+    api.panel("jobs", { endpoint: "simulations", text, keep: !first });
     const r = await fetch("/v1/simulations", { method: "POST", headers: { "Content-Type": "application/json" }, body: text });
     const json = await r.json().catch(() => ({}));
     if (r.status !== 202) {
-      refused(r.status, json);
-      return;
+      if (first) {
+        refused(r.status, json);
+        return { refused: true };
+      }
+      const loose = (json.errors || []).map((e) => `${e.pointer}: ${e.detail}`);
+      return { text: `${what}: ${r.status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}` };
     }
-    current = { id: json.id };
+    current = { id: json.id, cancelled: false };
+    state(json, what);
+    for (;;) {
+      await sleep(POLL_MS);
+      if (current.cancelled) return { text: "cancelled" };
+      const g = await fetch(`/v1/simulations/${current.id}`);
+      const s = await g.json().catch(() => ({}));
+      if (g.status !== 200) return { text: `${g.status} ${s.title || ""}: ${s.detail || ""}` };
+      state(s, what);
+      if (s.status === "done") return { result: s.result, elapsed: s.elapsed_ms };
+      if (s.status !== "queued" && s.status !== "running") {
+        const p = s.problem || {};
+        return { text: `${s.status}: ${p.detail || p.title || ""}` };
+      }
+    }
+  }
+
+  async function start() {
+    if (current) return;
+    api.clearErrors();
+    const { body, full } = requests();
     $("sim-start").disabled = true;
     $("sim-cancel").disabled = false;
-    state(json);
-    poll(body);
+    const hybrid = body.k_split !== undefined;
+    const a = await runJob(body, hybrid ? "hybrid" : "numerical", true);
+    let b = null;
+    if (a.result && full) b = await runJob(full, "full model", false);
+    const runs = [];
+    if (a.result) runs.push({ res: a.result, body, hybrid });
+    if (b && b.result) runs.push({ res: b.result, body: full, hybrid: false });
+    if (runs.length) await show(body, runs);
+    const elapsed = [a, b].filter((x) => x && x.result).map((x) => `${api.fmt(x.elapsed / 1000, 3)} s`);
+    const failed = [a, b].filter((x) => x && !x.result).map((x) => x.text);
+    finish(a.refused ? null : failed.length ? failed.join("; ") : `done in ${elapsed.join(" + ")}`);
   }
 
-  async function poll(body) {
-    if (!current) return;
-    const r = await fetch(`/v1/simulations/${current.id}`);
-    const s = await r.json().catch(() => ({}));
-    if (r.status !== 200) {
-      finish(`${r.status} ${s.title || ""}: ${s.detail || ""}`);
-      return;
-    }
-    state(s);
-    if (s.status === "queued" || s.status === "running") {
-      current.timer = setTimeout(() => poll(body), POLL_MS);
-      return;
-    }
-    if (s.status === "done") {
-      await show(body, s.result);
-      finish(`done in ${api.fmt(s.elapsed_ms / 1000, 3)} s`);
-    } else {
-      const p = s.problem || {};
-      finish(`${s.status}: ${p.detail || p.title || ""}`);
-    }
-  }
-
+  /* The buttons back; text (unless null: a refusal already said why) after the job's line. */
   function finish(text) {
-    if (current && current.timer) clearTimeout(current.timer);
     current = null;
     $("sim-start").disabled = false;
     $("sim-cancel").disabled = true;
-    $("sim-state").textContent += ` — ${text}`;
+    if (text !== null) $("sim-state").textContent += ` — ${text}`;
   }
 
   async function cancel() {
     if (!current) return;
-    const id = current.id;
-    clearTimeout(current.timer);
-    const r = await fetch(`/v1/simulations/${id}`, { method: "DELETE" });
+    current.cancelled = true;
+    const r = await fetch(`/v1/simulations/${current.id}`, { method: "DELETE" });
     const s = await r.json().catch(() => ({}));
-    if (s.id) state(s);
-    finish("cancelled");
+    if (s.id) state(s, "cancelled");
   }
 
-  /* The numerical curve with its error bars' half-widths, beside the theory at the same gaps. */
-  async function show(body, res) {
-    /* the theory as a smooth curve over the simulated range */
-    const lo = Math.min(...res.g_ave);
-    const hi = Math.max(...res.g_ave);
+  /* The runs with their error bars' half-widths, beside the theory over the same range. */
+  async function show(body, runs) {
+    const all = runs.flatMap((r) => r.res.g_ave);
+    const lo = Math.min(...all);
+    const hi = Math.max(...all);
     const theoryReq = { psd: body.psd, g_ave: hi > lo ? { min: lo, max: hi, n: 100 } : [lo] };
     if (body.material) theoryReq.material = body.material;
     const text = JSON.stringify(theoryReq);
     api.panel("jobs", { endpoint: "traction", text });
     const t = await api.post("traction", text);
-    const series = [
-      { name: "σ̄/σ0 numerical model", x: res.g_ave, y: res.sigma, err: res.error && res.error.sigma, color: "#d1495b", points: true },
-    ];
+    const series = runs.map((r) => ({
+      name: r.hybrid ? `σ̄/σ0 hybrid (k̃split = ${api.fmt(r.res.k_split)})` : "σ̄/σ0 numerical model",
+      x: r.res.g_ave,
+      y: r.res.sigma,
+      err: r.res.error && r.res.error.sigma,
+      color: r.hybrid ? "#2a9d5c" : "#d1495b",
+      points: true,
+    }));
     if (t.status === 200) series.push({ name: "σ̄/σ0 statistical theory", x: t.json.g_ave, y: t.json.sigma, err: t.json.error.sigma, color: "#1f5fbf" });
-    api.showSeries("jobs", series, { xLabel: "g̃ave", xName: "g̃ave", yLabel: "σ̄/σ0" }, [res, t.json]);
-    const worst = Math.max(...((res.error && res.error.sigma) || [0]).map(Math.abs));
-    $("readout-jobs").replaceChildren(
-      api.el("div", {}, `${res.g_ave.length} mean gaps, ${res.realizations} realization(s) on ${res.n}×${res.n}, L̃ = ${api.fmt(res.L)}; m̃0 = ${api.fmt(res.m0)} (grid ${api.fmt(res.m0_grid)})`),
-      api.el("div", { class: "meta" }, `largest standard error of σ̄ ${api.errFmt(worst)}; run ${api.fmt(res.elapsed_ms, 3)} ms`)
-    );
+    api.showSeries("jobs", series, { xLabel: "g̃ave", xName: "g̃ave", yLabel: "σ̄/σ0" }, [...runs.map((r) => r.res), t.json]);
+    const lines = runs.map((r) => {
+      const res = r.res;
+      const worst = Math.max(...((res.error && res.error.sigma) || [0]).map(Math.abs));
+      const head = `${r.hybrid ? "hybrid" : "numerical model"}: ${res.g_ave.length} mean gaps, ${res.realizations} realization(s) on ${res.n}×${res.n}, L̃ = ${api.fmt(res.L)}; m̃0 = ${api.fmt(res.m0)} (grid ${api.fmt(res.m0_grid)}); largest error of σ̄ ${api.errFmt(worst)}; run ${api.fmt(res.elapsed_ms, 3)} ms`;
+      const out = [api.el("div", {}, head)];
+      if (r.hybrid && res.fine) {
+        const f = res.fine;
+        const e = f.error || {};
+        out.push(
+          api.el(
+            "div",
+            { class: "meta", id: "readout-fine" },
+            `fine band (k̃split, k̃2]: m̃0 = ${api.fmt(f.m0)}; its modified law: g̃eq = ${api.fmt(f.g_eq)} ± ${api.errFmt(e.g_eq)}, σ̄max/σ0 = ${api.fmt(f.sigma_max)} ± ${api.errFmt(e.sigma_max)}, Δγeff/Δγ = ${api.fmt(f.dgamma_eff)} ± ${api.errFmt(e.dgamma_eff)} (law tabulated to ${api.errFmt(f.law_error)})`
+          )
+        );
+      }
+      return out;
+    });
+    const hyb = runs.find((r) => r.hybrid);
+    const full = runs.find((r) => !r.hybrid);
+    if (hyb && full) {
+      let d = -1;
+      let at = null;
+      hyb.res.g_ave.forEach((g, i) => {
+        const j = full.res.g_ave.indexOf(g);
+        if (j >= 0 && Math.abs(hyb.res.sigma[i] - full.res.sigma[j]) > d) {
+          d = Math.abs(hyb.res.sigma[i] - full.res.sigma[j]);
+          at = g;
+        }
+      });
+      lines.push([
+        api.el(
+          "div",
+          { class: "meta", id: "readout-compare" },
+          `largest |hybrid − full| = ${api.fmt(d, 3)} σ0 at g̃ave = ${api.fmt(at)}; run times: hybrid ${api.fmt(hyb.res.elapsed_ms, 3)} ms, full model ${api.fmt(full.res.elapsed_ms, 3)} ms (full/hybrid = ${api.fmt(full.res.elapsed_ms / hyb.res.elapsed_ms, 3)})`
+        ),
+      ]);
+    }
+    $("readout-jobs").replaceChildren(...lines.flat());
   }
 
   function init(helpers) {

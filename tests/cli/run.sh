@@ -178,6 +178,12 @@ check "simulations: no progress bar when stderr is not a terminal" eval '[ ! -s 
 script -qec "$LJGAP simulations $tmp/sim.json >$tmp/tty.out" /dev/null >"$tmp/tty" 2>&1
 check "simulations: a progress bar up to 100% when stderr is a terminal" \
     eval 'grep -q "100%" "$tmp/tty" && jq -e ".sigma | length == 2" "$tmp/tty.out" >/dev/null'
+echo '{"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1},"n":16,"realizations":2,
+    "k_split":3,"g_ave":[1.5,3]}' >"$tmp/in"
+run simulations
+check "simulations with k_split (the hybrid): k_split and the fine band's law in the result" \
+    eval 'rc_is 0 && jq_true ".k_split == 3 and (.sigma | length) == 2 and .fine.m0 > 0 and
+    .fine.dgamma_eff < 1 and .fine.error.dgamma_eff >= 0"'
 echo "{$sim,\"n\":33,\"g_ave\":[2]}" >"$tmp/in"
 run simulations
 check "simulations: odd n is a 422 at /n, exit 1" eval 'rc_is 1 &&

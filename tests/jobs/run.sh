@@ -2,7 +2,7 @@
 # Simulation jobs through build/ljgapd (POST/GET/DELETE /v1/simulations) and build/ljgap: a small
 # job of the real numerical model end to end (202, Location, polling, every field finite, m0 per
 # realization, traction close to the continuum answer far from contact, the CLI printing the same
-# numbers), cancel of a running and of a queued job, the full queue (503 + Retry-After), the
+# numbers), a hybrid job (k_split: its fine band's fields; at k_split = k1 the theory's numbers), cancel of a running and of a queued job, the full queue (503 + Retry-After), the
 # time cap (failed with a problem), validation (422 with pointers), unknown ids (404), wrong
 # methods (405), /healthz while a job runs, and SIGTERM with a job running.
 # One "ok ..." / "not ok ..." line per check (summed by tests/run.sh).
@@ -84,6 +84,22 @@ check "CLI simulations: exit 0, one line" eval '[ $rc = 0 ] && [ "$(wc -l <"$tmp
 check "CLI prints the result object of the HTTP job (same seed, same numbers)" \
     jq_ok --slurpfile h "$tmp/small.json" '($h[0].result | del(.elapsed_ms, .meta.elapsed_ms))
         == del(.elapsed_ms, .meta.elapsed_ms)' "$tmp/cli.json"
+
+# ---- a hybrid job: the fine band (k_split, k2] through its law; k_split = k1 is the theory ----
+submit "{$PSD,\"n\":16,\"realizations\":2,\"k_split\":3,\"g_ave\":[1.5,3]}"
+check "a hybrid job (k_split = 3 on 16 points) ends done" wait_state "$ID" done failed
+check "hybrid result: k_split, the fine band's m0 and its law's g_eq, sigma_max, dgamma_eff with errors" json '.result as $r | $r.k_split == 3 and ($r.sigma | length == 2) and
+    ($r.fine | (.m0 - 0.01416 | fabs) < 1e-4 and .g_eq > 1 and .sigma_max < 1 and
+     .dgamma_eff < 1 and (.error | .g_eq >= 0 and .sigma_max >= 0 and .dgamma_eff >= 0)
+     and .law_error >= 0) and ($r.m0_realized | all(. - 0.08584 | fabs < 1e-4))'
+submit "{$PSD,\"n\":8,\"realizations\":2,\"k_split\":1,\"g_ave\":[1.5,3]}"
+check "a hybrid job at k_split = k1 ends done" wait_state "$ID" done failed
+cp "$tmp/body" "$tmp/alone.json"
+req POST /v1/traction -H 'Content-Type: application/json' --data-binary "{$PSD,\"g_ave\":[1.5,3]}"
+check "k_split = k1 is the theory alone: sigma = POST /v1/traction within the errors" \
+    jq_ok --slurpfile t "$tmp/body" '[.result.sigma, .result.error.sigma, $t[0].sigma,
+        $t[0].error.sigma] | transpose | all(((.[0] - .[2]) | fabs) <= .[1] + .[3])' \
+    "$tmp/alone.json"
 
 # ---- cancel a running job ----
 submit "$LONG"

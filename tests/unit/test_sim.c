@@ -18,44 +18,17 @@
 
 #include "check.h"
 #include "ljgap_sim.h"
+#include "simcheck.h"
 
 #include <gsl/gsl_errno.h>
 #include <string.h>
-
-static ljgap_psd fig6_psd(double m0, double k2)
-{
-    ljgap_psd p;
-    assert_int_equal(ljgap_psd_power(&p, 2.2, 1.0, k2, LJGAP_LEVEL_M0, m0), LJGAP_OK);
-    return p;
-}
-
-static ljgap_sim_opts opts(int n, int R)
-{
-    ljgap_sim_opts o;
-    ljgap_sim_opts_default(&o);
-    o.n = n;
-    o.realizations = R;
-    o.max_seconds = 60;
-    return o;
-}
-
-static int run(const ljgap_psd *p, const ljgap_sim_opts *o, const double *g, size_t n,
-               ljgap_sim_result *r)
-{
-    ljgap_warnings w = {0};
-    int st = ljgap_sim_run(p, o, g, n, r, &w);
-    if (st != LJGAP_OK)
-        for (int i = 0; i < w.n; i++)
-            print_error("%s\n", w.msg[i]);
-    return st;
-}
 
 static void variance(void **state)
 {
     ljgap_psd p = fig6_psd(0.218, 8.0);
     const double g = 3.0;
     for (int match = 0; match < 2; match++) {
-        ljgap_sim_opts o = opts(32, 3);
+        ljgap_sim_opts o = sim_opts(32, 3, 0.0);
         o.match_m0 = match;
         ljgap_sim_result r;
         assert_int_equal(run(&p, &o, &g, 1, &r), LJGAP_OK);
@@ -69,7 +42,7 @@ static void variance(void **state)
     ljgap_psd q = fig6_psd(0.1, 4.0);
     double prev = INFINITY;
     for (int m = 1; m <= 16; m *= 2) {
-        ljgap_sim_opts o = opts(8 * m, 1);
+        ljgap_sim_opts o = sim_opts(8 * m, 1, 0.0);
         o.L = 2 * M_PI * m;
         ljgap_sim_result r;
         assert_int_equal(run(&q, &o, &g, 1, &r), LJGAP_OK);
@@ -90,7 +63,7 @@ static void residual_met(void **state)
     for (int i = 0; i < 12; i++)
         g[i] = 0.8 + 0.2 * i;
     ljgap_sim_result loose, tight;
-    ljgap_sim_opts o = opts(32, 1);
+    ljgap_sim_opts o = sim_opts(32, 1, 0.0);
     o.tol = 1e-5;
     assert_int_equal(run(&p, &o, g, 12, &loose), LJGAP_OK);
     o.tol = 1e-9;
@@ -111,7 +84,7 @@ static void flat_is_lj(void **state)
     ljgap_psd p = fig6_psd(1e-14, 8.0);
     double g[8] = {3.0, 2.0, 1.5, 1.2, 1.1, 1.0, 0.9, 0.8};
     ljgap_sim_result r;
-    ljgap_sim_opts o = opts(16, 1);
+    ljgap_sim_opts o = sim_opts(16, 1, 0.0);
     assert_int_equal(run(&p, &o, g, 8, &r), LJGAP_OK);
     for (int i = 0; i < 8; i++) {
         double want = ljgap_sigma(g[i]);
@@ -131,7 +104,7 @@ static void small_roughness_vs_theory(void **state)
     ljgap_psd p = fig6_psd(m0, 8.0);
     double g[3] = {2.0, 2.5, 3.0};
     ljgap_sim_result r;
-    ljgap_sim_opts o = opts(64, 2);
+    ljgap_sim_opts o = sim_opts(64, 2, 0.0);
     o.L = L;
     assert_int_equal(run(&p, &o, g, 3, &r), LJGAP_OK);
     ljgap_opts to;
@@ -171,7 +144,7 @@ static void seeds(void **state)
     ljgap_psd p = fig6_psd(0.218, 8.0);
     double g[2] = {1.5, 2.0};
     ljgap_sim_result a, b, c;
-    ljgap_sim_opts o = opts(16, 2);
+    ljgap_sim_opts o = sim_opts(16, 2, 0.0);
     assert_int_equal(run(&p, &o, g, 2, &a), LJGAP_OK);
     assert_int_equal(run(&p, &o, g, 2, &b), LJGAP_OK);
     o.seed = 7;
@@ -192,7 +165,7 @@ static void one_realization_warns(void **state)
     double g = 2.0;
     ljgap_sim_result r;
     for (int R = 1; R <= 2; R++) {
-        ljgap_sim_opts o = opts(16, R);
+        ljgap_sim_opts o = sim_opts(16, R, 0.0);
         ljgap_warnings w = {0};
         assert_int_equal(ljgap_sim_run(&p, &o, &g, 1, &r, &w), LJGAP_OK);
         int said = 0;
@@ -215,7 +188,7 @@ static void hysteresis(void **state)
     for (int i = 0; i < 17; i++)
         g[i] = 2.2 - 0.075 * i; /* 2.2 .. 1.0 */
     ljgap_sim_result r;
-    ljgap_sim_opts o = opts(32, 1);
+    ljgap_sim_opts o = sim_opts(32, 1, 0.0);
     o.L = 20.0;
     assert_int_equal(run(&p, &o, g, 17, &r), LJGAP_OK);
     int jumps = 0, first = -1;
@@ -240,28 +213,13 @@ static void hysteresis(void **state)
     ljgap_sim_result_free(&r);
 }
 
-typedef struct {
-    volatile int *cancel;
-    double last;
-    int calls, backwards;
-} prog_ctx;
-
-static void on_progress(void *ctx, double f)
-{
-    prog_ctx *c = ctx;
-    if (f < c->last || f > 1.0) c->backwards = 1;
-    c->last = f;
-    c->calls++;
-    if (c->cancel) *c->cancel = 1;
-}
-
 static void control(void **state)
 {
     ljgap_psd p = fig6_psd(0.218, 8.0);
     double g[4] = {3.0, 2.0, 1.5, 1.0};
     ljgap_sim_result r;
     ljgap_warnings w = {0};
-    ljgap_sim_opts o = opts(16, 2);
+    ljgap_sim_opts o = sim_opts(16, 2, 0.0);
     prog_ctx pc = {0};
     o.progress = on_progress;
     o.progress_ctx = &pc;
@@ -303,14 +261,14 @@ static void bad_inputs(void **state)
                 {"big n", "n must be even", 0, 1024}, {"R = 0", "realizations", 1, 0},
                 {"R = 17", "realizations", 1, 17},    {"n too coarse", "n >= 16", 0, 8}};
     for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++) {
-        ljgap_sim_opts o = opts(32, 2);
+        ljgap_sim_opts o = sim_opts(32, 2, 0.0);
         *(ints[i].field == 0 ? &o.n : &o.realizations) = ints[i].value;
         ljgap_warnings w = {0};
         assert_int_equal(ljgap_sim_run(&p, &o, g, 2, &r, &w), LJGAP_EINVAL);
         assert_true(w.n >= 1);
         if (!strstr(w.msg[0], ints[i].says)) fail_msg("%s: %s", ints[i].what, w.msg[0]);
     }
-    ljgap_sim_opts o = opts(32, 2);
+    ljgap_sim_opts o = sim_opts(32, 2, 0.0);
     ljgap_warnings w = {0};
     assert_int_equal(ljgap_sim_run(&inf, &o, g, 2, &r, &w), LJGAP_EINVAL);
     assert_int_equal(ljgap_sim_run(NULL, &o, g, 2, &r, &w), LJGAP_EINVAL);

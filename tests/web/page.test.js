@@ -292,6 +292,26 @@ test("simulation jobs: a form with a progress bar when the server offers them, e
   const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-jobs")));
   assert.deepEqual(fig.series.map((x) => x.name), ["σ̄/σ0 numerical model", "σ̄/σ0 statistical theory"]);
   assert.deepEqual(fig.series[0].x, [1.5, 2, 3]);
+  // the hybrid (k_split) and the full model beside it: theory, hybrid and full model in one plot
+  assert.equal(await page.isVisible("#sim-full-field"), false);
+  await page.fill("#sim-ksplit", "3");
+  assert.equal(await page.isVisible("#sim-full-field"), true);
+  await page.fill("#sim-n", "16");
+  await page.check("#sim-full");
+  await page.fill("#sim-nfull", "32");
+  await page.click("#sim-start");
+  await page.waitForFunction(() => /done in .* \+ |failed|cancelled|refused/.test(document.getElementById("sim-state").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#sim-state"), /done in/);
+  const hyb = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-jobs")));
+  assert.deepEqual(hyb.series.map((x) => x.name), ["σ̄/σ0 hybrid (k̃split = 3)", "σ̄/σ0 numerical model", "σ̄/σ0 statistical theory"]);
+  assert.match(await page.textContent("#readout-fine"), /fine band .* m̃0 = 0\.0308\d*; .* g̃eq = 1\.04\d* ±/);
+  assert.match(await page.textContent("#readout-compare"), /largest \|hybrid − full\| = 0\.\d+ σ0 at g̃ave = /);
+  const jobsJSON = JSON.parse(await page.evaluate(() => LJApp.panelJSON("jobs")));
+  assert.deepEqual(jobsJSON.requests.map((r) => r.url.replace(/.*\/v1\//, "")), ["simulations", "simulations", "traction"]);
+  assert.equal(jobsJSON.requests[0].body.k_split, 3);
+  assert.equal(jobsJSON.requests[1].body.k_split, undefined);
+  assert.equal(jobsJSON.requests[1].body.n, 32);
+  await page.fill("#sim-ksplit", "");
   // a bad grid answers 422 at once, beside the field (the server's answer, see the note at the top)
   await page.fill("#sim-n", "33");
   const body = await page.evaluate(() => LJJobs.request());
