@@ -55,6 +55,9 @@ static void usage(FILE *f)
         "  --job-queue N         simulation jobs waiting; more get 503 + Retry-After (default 8)\n"
         "  --job-keep N          finished jobs kept for polling, for at most an hour (default 64)\n"
         "  --job-seconds N       wall-time cap of one simulation (default 600)\n"
+        "  --job-threads N       threads of one simulation, each running realizations (default\n"
+        "                        1); give job-workers x job-threads the cores the compute slots\n"
+        "                        leave\n"
         "  --state-dir DIR       keep the simulation jobs in DIR/jobs.sqlite, so that queued,\n"
         "                        running and finished jobs survive a restart or a crash; one\n"
         "                        ljgapd per DIR (default: $STATE_DIRECTORY as systemd sets it,\n"
@@ -110,6 +113,7 @@ static void defaults(ljgapd_config *c)
     c->stop_s = 9.5;
     ljgap_jobs_config_default(&c->jobs);
     c->job_seconds = 600;
+    c->job_threads = 1;
     c->job_retry = 10;
     c->cancel_wait_s = 2.0;
 }
@@ -135,6 +139,7 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
         {"job-queue", required_argument, NULL, 'Q'},
         {"job-keep", required_argument, NULL, 'K'},
         {"job-seconds", required_argument, NULL, 'S'},
+        {"job-threads", required_argument, NULL, 'T'},
         {"state-dir", required_argument, NULL, 'D'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
@@ -202,6 +207,9 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             break;
         case 'S':
             bad = parse_uint(optarg, 1, 86400, &c->job_seconds);
+            break;
+        case 'T':
+            bad = parse_uint(optarg, 1, 64, &c->job_threads);
             break;
         case 'D':
             c->state_dir = optarg;

@@ -54,6 +54,7 @@ typedef struct {
     double stop_s;               /* shutdown: seconds after the signal at which we stop (9.5) */
     ljgap_jobs_config jobs;      /* simulation jobs: workers, queue, finished jobs kept */
     unsigned job_seconds;        /* wall-time cap of one simulation (600) */
+    unsigned job_threads;        /* threads of one simulation's realizations (1) */
     unsigned job_retry;          /* Retry-After seconds when the job queue is full (10) */
     double cancel_wait_s;        /* DELETE waits this long for a running job to stop (2) */
     const char *state_dir;       /* where the jobs are kept (--state-dir, or main.c's default) */

@@ -204,6 +204,7 @@ int main(int argc, char **argv)
 
     ljgap_limits_default(&limits);
     limits.max_seconds = cfg->max_seconds;
+    limits.sim_threads = cfg->job_threads;
     ljgap_handler_set_limits(&limits);
     if (getrandom(&srv.id_seed, sizeof srv.id_seed, 0) != sizeof srv.id_seed)
         srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);

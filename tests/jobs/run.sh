@@ -33,7 +33,7 @@ SMALL="{$PSD,\"n\":32,\"realizations\":2,\"seed\":7,\"g_ave\":[2,3,4]}"
 LONG="{$PSD,\"n\":256,\"realizations\":16,\"g_ave\":{\"min\":1.2,\"max\":4,\"n\":150}}"
 
 # ================= one worker, a queue of two =================
-if ! start main --job-workers 1 --job-queue 2 --compute-slots 1; then
+if ! start main --job-workers 1 --job-threads 2 --job-queue 2 --compute-slots 1; then
     echo "not ok - jobs: ljgapd did not start: $(head -c 300 "$tmp/main.err")"
     exit 1
 fi
