@@ -139,14 +139,14 @@ $(BUILD)/ljgapd: $(BUILD)/server/ljgapd/main.o $(BUILD)/gen/openapi.o $(BUILD)/g
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
-# server/openapi.json embedded in the daemon as the C string ljgapd_openapi (no xxd needed).
+# server/openapi.json embedded in the daemon as the C string ljgapd_openapi (no xxd needed): sed
+# escapes backslashes, quotes and question marks (no trigraphs), one string literal per line.
 $(BUILD)/gen/openapi.c: server/openapi.json
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  GEN     $@")
-	$(Q)awk 'BEGIN { print "#include <stddef.h>"; print "const char ljgapd_openapi[] =" } \
-	  { gsub(/\\/, "\\\\"); gsub(/"/, "\\\""); print "    \"" $$0 "\\n\"" } \
-	  END { print "    \"\";"; \
-	        print "const size_t ljgapd_openapi_len = sizeof ljgapd_openapi - 1;" }' $< > $@
+	$(Q){ echo '#include <stddef.h>'; echo 'const char ljgapd_openapi[] ='; \
+	  sed -e 's/\\/\\\\/g' -e 's/"/\\"/g' -e 's/?/\\?/g' -e 's/^/    "/' -e 's/$$/\\n"/' $<; \
+	  echo '    "";'; echo 'const size_t ljgapd_openapi_len = sizeof ljgapd_openapi - 1;'; } > $@
 
 # The page (web/: every file it loads, uPlot from npm included, and the icons) embedded in the
 # daemon as the table ljgapd_web_files (server/webfiles.h), written by tools/embed.c.

@@ -26,7 +26,8 @@ double seconds_since(const struct timespec *t0)
     return (double)(t.tv_sec - t0->tv_sec) + 1e-9 * (double)(t.tv_nsec - t0->tv_nsec);
 }
 
-/* Adds the common headers, queues resp and records the status. Takes ownership of resp. */
+/* Adds the common headers (and Retry-After to a 503 that has none: openapi.json says every 503
+ * has it), queues resp and records the status. Takes ownership of resp. */
 static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
                                struct MHD_Response *resp, const char *ctype)
 {
@@ -38,6 +39,12 @@ static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
     MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
     /* The page loads nothing from elsewhere and runs no inline code. */
     MHD_add_response_header(resp, "Content-Security-Policy", "default-src 'self'");
+    if (status == MHD_HTTP_SERVICE_UNAVAILABLE &&
+        !MHD_get_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER)) {
+        char retry[16];
+        snprintf(retry, sizeof retry, "%u", srv.cfg.retry_after);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, retry);
+    }
     if (atomic_load(&srv.stopping))
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
     ret = MHD_queue_response(c, (unsigned)status, resp);
@@ -69,35 +76,38 @@ enum MHD_Result respond_reply(struct MHD_Connection *c, request *r, ljgap_reply 
     return ret;
 }
 
-/* Problem types of the answers written here. */
-static const char *problem_type(int status)
+/* Problem types of the answers written here (their titles are problems.c's, as the
+ * handler's are: one title per type). */
+static const char *problem_slug(int status)
 {
     switch (status) {
     case MHD_HTTP_NOT_FOUND:
-        return PROBLEM_BASE "not-found";
+        return "not-found";
     case MHD_HTTP_METHOD_NOT_ALLOWED:
-        return PROBLEM_BASE "method-not-allowed";
+        return "method-not-allowed";
     case MHD_HTTP_CONTENT_TOO_LARGE:
-        return PROBLEM_BASE "content-too-large";
+        return "content-too-large";
     case MHD_HTTP_UNSUPPORTED_MEDIA_TYPE:
-        return PROBLEM_BASE "unsupported-media-type";
+        return "unsupported-media-type";
     case MHD_HTTP_SERVICE_UNAVAILABLE:
-        return PROBLEM_BASE "busy";
+        return "busy";
     default:
-        return PROBLEM_BASE "out-of-memory";
+        return "out-of-memory";
     }
 }
 
 enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status,
                                 const char *detail, const char *header, const char *value)
 {
-    const char *title = MHD_get_reason_phrase_for((unsigned)status);
+    const char *slug = problem_slug(status);
+    const ljgap_problem_doc *doc = ljgap_problem_find(slug);
     cJSON *p = cJSON_CreateObject();
-    char *text = NULL;
+    char type[64], *text = NULL;
     struct MHD_Response *resp = NULL;
 
-    if (p && cJSON_AddStringToObject(p, "type", problem_type(status)) &&
-        cJSON_AddStringToObject(p, "title", title) &&
+    snprintf(type, sizeof type, PROBLEM_BASE "%s", slug);
+    if (p && doc && cJSON_AddStringToObject(p, "type", type) &&
+        cJSON_AddStringToObject(p, "title", doc->title) &&
         cJSON_AddNumberToObject(p, "status", status) &&
         cJSON_AddStringToObject(p, "detail", detail) &&
         cJSON_AddStringToObject(p, "instance", r->path) && cJSON_AddArrayToObject(p, "errors"))
