@@ -8,6 +8,11 @@
  * the variance m0 = 2π∫k PS dk (22) becomes m̃0 = m0/ε², so h_rms = √m0 is in units of ε.
  * Composite moduli: 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 (theory.md §6).
  *
+ * The SI forms of whole results (ljgap_si_*: a summary, traction points, a PDF) are built here
+ * from those conversions, so an answer's SI numbers come from one place: gaps x ε, tractions
+ * x σ0, energies x Δγ (Δγeff is in units of Δγ), variances x ε², wavenumbers / χ, densities
+ * of the gap / ε; an error converts with its value.
+ *
  * Pure arithmetic: no allocation, no JSON, no state.
  */
 #include "ljgap_units.h"
@@ -95,4 +100,47 @@ double ljgap_units_var_to_dimless(const ljgap_material *m, double v)
 double ljgap_units_var_to_si(const ljgap_material *m, double vt)
 {
     return vt * (m->epsilon * m->epsilon);
+}
+
+/* An estimate times a positive scale. */
+static ljgap_est est_scaled(ljgap_est e, double f)
+{
+    return (ljgap_est){e.value * f, e.err * f};
+}
+
+void ljgap_si_scales_of(const ljgap_material *m, ljgap_si_scales *out)
+{
+    out->chi_m = ljgap_units_chi(m);
+    out->sigma0_Pa = ljgap_units_sigma0(m);
+    out->E_star_Pa = m->E_star;
+}
+
+void ljgap_si_summary_of(const ljgap_material *m, const ljgap_summary *s, ljgap_si_summary *out)
+{
+    double s0 = ljgap_units_sigma0(m);
+    out->g_eq_m = est_scaled(s->g_eq, m->epsilon);
+    out->sigma_max_Pa = est_scaled(s->sigma_max, s0);
+    out->g_at_max_m = est_scaled(s->g_at_max, m->epsilon);
+    out->dgamma_eff_J_m2 = est_scaled(s->dgamma_eff, m->dgamma);
+    out->m0_m2 = ljgap_units_var_to_si(m, s->m0);
+}
+
+void ljgap_si_points_of(const ljgap_material *m, const double *g_ave, const ljgap_est *sigma,
+                        size_t n, ljgap_si_point *out)
+{
+    double s0 = ljgap_units_sigma0(m);
+    for (size_t i = 0; i < n; i++) {
+        out[i].g_ave_m = ljgap_units_len_to_si(m, g_ave[i]);
+        out[i].sigma_Pa = est_scaled(sigma[i], s0);
+    }
+}
+
+void ljgap_si_pdf_of(const ljgap_material *m, const ljgap_pdf *p, ljgap_si_pdf *out)
+{
+    out->k2_per_m = isinf(p->k2) ? p->k2 : ljgap_units_k_to_si(m, p->k2);
+    for (size_t k = 0; k < p->n; k++) {
+        out->g_m[k] = ljgap_units_len_to_si(m, p->g[k]);
+        out->phi_per_m[k] = p->phi[k] / m->epsilon;
+    }
+    out->sigma_Pa = est_scaled(p->sigma, ljgap_units_sigma0(m));
 }

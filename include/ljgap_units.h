@@ -51,6 +51,49 @@ double ljgap_units_len_to_si(const ljgap_material *m, double xt);
 double ljgap_units_var_to_dimless(const ljgap_material *m, double v);
 double ljgap_units_var_to_si(const ljgap_material *m, double vt);
 
+/* ---- answers in SI: one call per kind of result, into a struct ----
+ * The handler serialises these as the "si" object of an answer (and the CSV form is written
+ * from that JSON), so every SI number of every answer is converted here and nowhere else.
+ * Errors convert with their values. A contact answer's SI form is its summary's (the pull-off
+ * forces of ljgap_contact are in N already). */
+
+/* The scales a material sets. */
+typedef struct {
+    double chi_m;     /* the elastic length χ (m) */
+    double sigma0_Pa; /* the traction scale σ0 of (9) (Pa) */
+    double E_star_Pa; /* the effective modulus E* (Pa) */
+} ljgap_si_scales;
+void ljgap_si_scales_of(const ljgap_material *m, ljgap_si_scales *out);
+
+/* The adhesion summary in SI. */
+typedef struct {
+    ljgap_est g_eq_m;          /* equilibrium mean gap (m) */
+    ljgap_est sigma_max_Pa;    /* pull-off traction (Pa) */
+    ljgap_est g_at_max_m;      /* mean gap of the traction maximum (m) */
+    ljgap_est dgamma_eff_J_m2; /* effective work of adhesion (J/m²) */
+    double m0_m2;              /* height variance (m²) */
+} ljgap_si_summary;
+void ljgap_si_summary_of(const ljgap_material *m, const ljgap_summary *s, ljgap_si_summary *out);
+
+/* One point of a traction curve in SI. */
+typedef struct {
+    double g_ave_m;     /* mean gap (m) */
+    ljgap_est sigma_Pa; /* mean traction (Pa) */
+} ljgap_si_point;
+/* The n points (g_ave[i] in ε, sigma[i] in σ0) into out[0..n). */
+void ljgap_si_points_of(const ljgap_material *m, const double *g_ave, const ljgap_est *sigma,
+                        size_t n, ljgap_si_point *out);
+
+/* A gap PDF in SI; g_m and phi_per_m are the caller's arrays of the PDF's n points. */
+typedef struct {
+    double k2_per_m;    /* its cut-off (1/m; INFINITY stays INFINITY) */
+    double *g_m;        /* the gaps (m) */
+    double *phi_per_m;  /* the density at each (1/m) */
+    ljgap_est sigma_Pa; /* its mean traction (Pa) */
+} ljgap_si_pdf;
+/* Fills out from p; out->g_m and out->phi_per_m must hold p->n values. */
+void ljgap_si_pdf_of(const ljgap_material *m, const ljgap_pdf *p, ljgap_si_pdf *out);
+
 /* ---- contact.c: a sphere of radius R on the rough flat (theory.md §6) ---- */
 
 /* Pull-off load of the Maugis-Dugdale model under load control, in units of πwR (w the

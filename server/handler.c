@@ -256,29 +256,30 @@ static void put_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_k
     put(j, err_parent, err_key, err);
 }
 
-/* The adhesion fields of s in SI (m, Pa, J/m², m²) into obj. */
+/* The adhesion fields of s in SI (ljgap_si_summary_of: m, Pa, J/m², m²) into obj. */
 static void put_si_summary(job *j, cJSON *obj, const ljgap_summary *s)
 {
-    const ljgap_material *m = &j->rq.mat;
-    double s0 = ljgap_units_sigma0(m);
-    put_num(j, obj, "g_eq_m", ljgap_units_len_to_si(m, s->g_eq.value), "si.g_eq_m", -1);
-    put_num(j, obj, "sigma_max_Pa", s->sigma_max.value * s0, "si.sigma_max_Pa", -1);
-    put_num(j, obj, "g_at_max_m", ljgap_units_len_to_si(m, s->g_at_max.value), "si.g_at_max_m", -1);
-    put_num(j, obj, "dgamma_eff_J_m2", s->dgamma_eff.value * m->dgamma, "si.dgamma_eff_J_m2", -1);
-    put_num(j, obj, "m0_m2", ljgap_units_var_to_si(m, s->m0), "si.m0_m2", -1);
+    ljgap_si_summary si;
+    ljgap_si_summary_of(&j->rq.mat, s, &si);
+    put_num(j, obj, "g_eq_m", si.g_eq_m.value, "si.g_eq_m", -1);
+    put_num(j, obj, "sigma_max_Pa", si.sigma_max_Pa.value, "si.sigma_max_Pa", -1);
+    put_num(j, obj, "g_at_max_m", si.g_at_max_m.value, "si.g_at_max_m", -1);
+    put_num(j, obj, "dgamma_eff_J_m2", si.dgamma_eff_J_m2.value, "si.dgamma_eff_J_m2", -1);
+    put_num(j, obj, "m0_m2", si.m0_m2, "si.m0_m2", -1);
 }
 
-/* The "si" object of an answer (NULL without a material): the scales, and the adhesion
- * fields of s in SI when s is not NULL. */
+/* The "si" object of an answer (NULL without a material): the scales (ljgap_si_scales_of),
+ * and the adhesion fields of s in SI when s is not NULL. */
 static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
 {
-    const ljgap_material *m = &j->rq.mat;
+    ljgap_si_scales sc;
     cJSON *si;
     if (!j->rq.has_material) return NULL;
+    ljgap_si_scales_of(&j->rq.mat, &sc);
     si = put(j, parent, "si", cJSON_CreateObject());
-    put_num(j, si, "chi_m", ljgap_units_chi(m), "si.chi_m", -1);
-    put_num(j, si, "sigma0_Pa", ljgap_units_sigma0(m), "si.sigma0_Pa", -1);
-    put_num(j, si, "E_star_Pa", m->E_star, "si.E_star_Pa", -1);
+    put_num(j, si, "chi_m", sc.chi_m, "si.chi_m", -1);
+    put_num(j, si, "sigma0_Pa", sc.sigma0_Pa, "si.sigma0_Pa", -1);
+    put_num(j, si, "E_star_Pa", sc.E_star_Pa, "si.E_star_Pa", -1);
     if (s) put_si_summary(j, si, s);
     return si;
 }
@@ -364,14 +365,16 @@ static int run_traction(job *j)
     put_nums(j, err, "sigma", &sigma[0].err, rq->nx, sizeof *sigma, "error.sigma");
     put_summary(j, sum_obj, err, "summary", &sum);
     if ((si = put_si(j, j->ans, NULL))) {
-        cJSON *a = put(j, si, "g_ave_m", cJSON_CreateArray());
-        cJSON *b = put(j, si, "sigma_Pa", cJSON_CreateArray());
-        for (size_t i = 0; a && b && i < rq->nx; i++) {
-            put_num(j, a, NULL, ljgap_units_len_to_si(&rq->mat, rq->x[i]), "si.g_ave_m", (long)i);
-            put_num(j, b, NULL, sigma[i].value * ljgap_units_sigma0(&rq->mat), "si.sigma_Pa",
-                    (long)i);
+        ljgap_si_point *pt = malloc(rq->nx * sizeof *pt);
+        if (!pt) {
+            st = LJGAP_ENOMEM;
+            goto end;
         }
+        ljgap_si_points_of(&rq->mat, rq->x, sigma, rq->nx, pt);
+        put_nums(j, si, "g_ave_m", &pt[0].g_ave_m, rq->nx, sizeof *pt, "si.g_ave_m");
+        put_nums(j, si, "sigma_Pa", &pt[0].sigma_Pa.value, rq->nx, sizeof *pt, "si.sigma_Pa");
         put_si_summary(j, put(j, si, "summary", cJSON_CreateObject()), &sum);
+        free(pt);
     }
 end:
     free(sigma);
@@ -395,20 +398,24 @@ static int run_pdf(job *j)
     errs = put(j, put(j, j->ans, "error", cJSON_CreateObject()), "pdfs", cJSON_CreateArray());
     if ((si = put_si(j, j->ans, NULL))) sip = put(j, si, "pdfs", cJSON_CreateArray());
     for (size_t i = 0; sip && i < rq->nx; i++) {
-        const ljgap_material *m = &rq->mat;
-        cJSON *s = put(j, sip, NULL, cJSON_CreateObject()), *g, *phi;
-        if (isinf(p[i].k2))
-            put(j, s, "k2_per_m", cJSON_CreateNull());
-        else
-            put_num(j, s, "k2_per_m", ljgap_units_k_to_si(m, p[i].k2), "si.pdfs.k2_per_m", (long)i);
-        g = put(j, s, "g_m", cJSON_CreateArray());
-        phi = put(j, s, "phi_per_m", cJSON_CreateArray());
-        for (size_t k = 0; g && phi && k < p[i].n; k++) {
-            put_num(j, g, NULL, ljgap_units_len_to_si(m, p[i].g[k]), "si.pdfs.g_m", (long)k);
-            put_num(j, phi, NULL, p[i].phi[k] / m->epsilon, "si.pdfs.phi_per_m", (long)k);
+        cJSON *s = put(j, sip, NULL, cJSON_CreateObject());
+        ljgap_si_pdf sp = {0};
+        sp.g_m = malloc((p[i].n ? p[i].n : 1) * 2 * sizeof *sp.g_m);
+        if (!sp.g_m) {
+            st = LJGAP_ENOMEM;
+            goto end;
         }
-        put_num(j, s, "sigma_Pa", p[i].sigma.value * ljgap_units_sigma0(m), "si.pdfs.sigma_Pa",
-                (long)i);
+        sp.phi_per_m = sp.g_m + p[i].n;
+        ljgap_si_pdf_of(&rq->mat, &p[i], &sp);
+        if (isinf(sp.k2_per_m))
+            put(j, s, "k2_per_m", cJSON_CreateNull()); /* null = ∞ by contract */
+        else
+            put_num(j, s, "k2_per_m", sp.k2_per_m, "si.pdfs.k2_per_m", (long)i);
+        put_nums(j, s, "g_m", sp.g_m, p[i].n, sizeof *sp.g_m, "si.pdfs.g_m");
+        put_nums(j, s, "phi_per_m", sp.phi_per_m, p[i].n, sizeof *sp.phi_per_m,
+                 "si.pdfs.phi_per_m");
+        put_num(j, s, "sigma_Pa", sp.sigma_Pa.value, "si.pdfs.sigma_Pa", (long)i);
+        free(sp.g_m);
     }
     for (size_t i = 0; pdfs && errs && i < rq->nx; i++) {
         cJSON *s = put(j, pdfs, NULL, cJSON_CreateObject());

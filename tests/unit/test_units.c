@@ -4,7 +4,10 @@
  * consistent with the power-law prefactor (P̃S(k̃) = PS(k̃/χ)/(ε²χ²)) and with the variance
  * (m̃0 = m0/ε²), and E* of two bodies. Contact: Maugis-Dugdale tends to JKR (1.5) as λ -> ∞
  * and to DMT (2) as λ -> 0 to 1e-3, decreases monotonically in between, and the forces of
- * ljgap_contact_compute follow their formulas, with λ = 1.16μ for the smooth law.
+ * ljgap_contact_compute follow their formulas, with λ = 1.16μ for the smooth law. The SI forms
+ * of whole results (ljgap_si_*) give the numbers the server answered before they existed (the
+ * handler then converted field by field): the Fig. 4 spectrum's adhesion, traction and PDF with
+ * E* = 1 GPa, Δγ = 0.05 J/m², ε = 0.3 nm; errors scale with their values.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -96,6 +99,66 @@ static void composite_modulus(void **state)
     assert_int_equal(ljgap_material_set(&m, INFINITY, 0.1, 1e-10), LJGAP_EINVAL);
 }
 
+/* Numbers of POST /v1/adhesion, /v1/traction and /v1/pdf with the material above, for the PSD
+ * {"kind":"power","D":2.5,"k1":1,"m0":0.5}: the dimensionless answer in, its si object out. */
+static void si_forms(void **state)
+{
+    const double rel = 2 * DBL_EPSILON;
+    ljgap_material m;
+    ljgap_si_scales sc;
+    ljgap_si_summary ss;
+    ljgap_summary sum = {{2.602798507198556, 5.96630730230933e-07},
+                         {0.10126109828607611, 1.3493469705558971e-08},
+                         {3.0591550788790745, 2.019459440130416e-06},
+                         {0.2014985192758613, 3.3700599001793665e-08},
+                         0.5,
+                         0.4697841169402636};
+    const double g[2] = {2, 3};
+    const ljgap_est sigma[2] = {{-1.117185516572449, 1.3434712484027487e-07},
+                                {0.1003680791475834, 2.1142970448440024e-07}};
+    ljgap_si_point pt[2];
+    double pg[3] = {0.6, 1.1, 1.6},
+           pphi[3] = {-2.5076949299505563e-160, 0.578894102600608, 0.0695624929126073};
+    double g_m[3], phi_m[3];
+    ljgap_pdf pdf = {5, 3, pg, pphi, 1, 0.98, {-2.275523875019925, 5.026745078154477e-08}, 0};
+    ljgap_si_pdf sp = {0, g_m, phi_m, {0, 0}};
+
+    assert_int_equal(ljgap_material_set(&m, 1e9, 0.05, 3e-10), LJGAP_OK);
+    ljgap_si_scales_of(&m, &sc);
+    near_rel(sc.chi_m, 3.375e-10, rel, "chi_m");
+    near_rel(sc.sigma0_Pa, 171066746.4265558, rel, "sigma0_Pa");
+    near_rel(sc.E_star_Pa, 1e9, 0, "E_star_Pa");
+
+    ljgap_si_summary_of(&m, &sum, &ss);
+    near_rel(ss.g_eq_m.value, 7.808395521595668e-10, rel, "g_eq_m");
+    near_rel(ss.sigma_max_Pa.value, 17322406.623378728, rel, "sigma_max_Pa");
+    near_rel(ss.g_at_max_m.value, 9.177465236637223e-10, rel, "g_at_max_m");
+    near_rel(ss.dgamma_eff_J_m2.value, 0.010074925963793065, rel, "dgamma_eff_J_m2");
+    near_rel(ss.m0_m2, 4.5e-20, rel, "m0_m2");
+    near_rel(ss.g_eq_m.err, sum.g_eq.err * 3e-10, rel, "g_eq_m err");
+    near_rel(ss.sigma_max_Pa.err, sum.sigma_max.err * sc.sigma0_Pa, rel, "sigma_max_Pa err");
+    near_rel(ss.dgamma_eff_J_m2.err, sum.dgamma_eff.err * 0.05, rel, "dgamma_eff err");
+
+    ljgap_si_points_of(&m, g, sigma, 2, pt);
+    near_rel(pt[0].g_ave_m, 6e-10, rel, "g_ave_m[0]");
+    near_rel(pt[1].g_ave_m, 9e-10, rel, "g_ave_m[1]");
+    near_rel(pt[0].sigma_Pa.value, -191113291.4749199, rel, "sigma_Pa[0]");
+    near_rel(pt[1].sigma_Pa.value, 17169640.744860135, rel, "sigma_Pa[1]");
+    near_rel(pt[1].sigma_Pa.err, sigma[1].err * sc.sigma0_Pa, rel, "sigma_Pa[1] err");
+
+    ljgap_si_pdf_of(&m, &pdf, &sp);
+    near_rel(sp.k2_per_m, 14814814814.814816, rel, "k2_per_m");
+    near_rel(g_m[0], 1.8e-10, rel, "g_m[0]");
+    near_rel(g_m[2], 4.8e-10, rel, "g_m[2]");
+    near_rel(phi_m[0], -8.35898309983519e-151, rel, "phi_per_m[0]");
+    near_rel(phi_m[1], 1929647008.6686938, rel, "phi_per_m[1]");
+    near_rel(phi_m[2], 231874976.37535763, rel, "phi_per_m[2]");
+    near_rel(sp.sigma_Pa.value, -389266465.7156072, rel, "pdf sigma_Pa");
+    pdf.k2 = INFINITY; /* the whole PSD: the cut-off stays infinite (null in JSON) */
+    ljgap_si_pdf_of(&m, &pdf, &sp);
+    assert_true(isinf(sp.k2_per_m) && sp.k2_per_m > 0);
+}
+
 static void md_limits(void **state)
 {
     ljgap_est P;
@@ -181,6 +244,7 @@ int main(void)
         cmocka_unit_test(round_trips),
         cmocka_unit_test(power_law_consistent),
         cmocka_unit_test(composite_modulus),
+        cmocka_unit_test(si_forms),
         cmocka_unit_test(md_limits),
         cmocka_unit_test(md_monotone),
         cmocka_unit_test(contact_forces),
