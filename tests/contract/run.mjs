@@ -229,6 +229,11 @@ async function simulations() {
   const done = await waitJob(id, (j) => j.status === "done" || j.status === "failed");
   check("the small job, done", "GET", `${P}/${id}`, done, { status: 200 });
   check("the small job's result as CSV", "GET", `${P}/${id}`, await call("GET", `${P}/${id}`, { headers: { Accept: "text/csv" } }), { status: 200 });
+  // a hybrid job (k_split): its result has k_split and the fine band
+  const hyb = check("a hybrid job", "POST", P, await post(P, { psd: { ...SIM_PSD, k2: 8 }, g_ave: [2, 3], n: 8, realizations: 1, k_split: 3 }), { status: 202 }).json?.id;
+  const hdone = check("the hybrid job, done", "GET", `${P}/${hyb}`, await waitJob(hyb, (j) => j.status === "done" || j.status === "failed"), { status: 200 });
+  report(hdone.json?.result?.fine && hdone.json.result.k_split === 3, "the hybrid job's result has k_split and fine");
+  check("the hybrid job's result as CSV", "GET", `${P}/${hyb}`, await call("GET", `${P}/${hyb}`, { headers: { Accept: "text/csv" } }), { status: 200 });
   check("Accept: application/xml", "GET", `${P}/${id}`, await call("GET", `${P}/${id}`, { headers: { Accept: "application/xml" } }), { status: 406 });
   check("DELETE a done job", "DELETE", `${P}/${id}`, await call("DELETE", `${P}/${id}`), { status: 200 });
   check("PUT", "PUT", `${P}/${id}`, await call("PUT", `${P}/${id}`), { status: 405 });
