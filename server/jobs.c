@@ -31,8 +31,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#define EVICT_SECONDS 5.0 /* the keeper evicts expired jobs this often */
-#define LOG_SECONDS 10.0  /* at most one store error logged per this many seconds */
+#define EVICT_SECONDS 5.0  /* the keeper evicts expired jobs this often */
+#define LOG_SECONDS 10.0   /* at most one store error logged per this many seconds */
+#define FINISH_RETRY_S 0.5 /* a failed write of a job's end is tried again this often */
 
 typedef struct slot {
     struct ljgap_jobs *js;         /* the runner (for the progress callback) */
@@ -126,24 +127,42 @@ static void on_progress(void *ctx, double fraction)
     pthread_mutex_unlock(&sl->js->lock);
 }
 
-/* Writes the end of claim rec: finish in state with answer (may be NULL). A store error is
- * tried again twice (the job would otherwise wait for the next start or lease). */
+/* Writes the end of claim rec: finish in state with answer (may be NULL). While the store
+ * fails (a database that went away), it is tried again every FINISH_RETRY_S for as long as the
+ * claim's lease could still hold (the keeper renews it meanwhile, once the store is back); after
+ * that another daemon may run the job again, and the run guard drops this answer anyway. A
+ * shutdown stops the retries: the job then runs again once its lease lapses. */
 static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state state,
                    const char *answer)
 {
-    int st = LJGAP_JOBSTORE_ERROR;
-    for (int i = 0; i < 3 && st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_LOST; i++) {
-        if (i) usleep(200000);
+    double until = ljgap_now() + js->cfg.lease_seconds;
+    int st, failed = 0, stopping = 0;
+    for (;;) {
         st = ljgap_jobstore_finish(js->store, rec->id, rec->run, state, answer,
                                    answer ? strlen(answer) : 0);
+        if (st != LJGAP_JOBSTORE_ERROR || stopping || ljgap_now() >= until) break;
+        if (!failed) log_store(js, "cannot write the end of job (trying again)", rec->id);
+        failed = 1;
+        pthread_mutex_lock(&js->lock);
+        if (!js->stopping) {
+            struct timespec t = deadline_in(FINISH_RETRY_S);
+            pthread_cond_timedwait(&js->work, &js->lock, &t);
+        }
+        stopping = js->stopping;
+        pthread_mutex_unlock(&js->lock);
     }
     if (st == LJGAP_JOBSTORE_LOST)
         fprintf(stderr,
-                "ljgapd: job %s: its lease lapsed and it was claimed again; this run's "
-                "answer is dropped\n",
+                failed ? "ljgapd: job %s: its end was written while the job store failed, or its "
+                         "lease lapsed meanwhile and it was claimed again\n"
+                       : "ljgapd: job %s: its lease lapsed and it was claimed again; this run's "
+                         "answer is dropped\n",
                 rec->id);
     else if (st != LJGAP_JOBSTORE_OK)
         log_store(js, "cannot write the end of job", rec->id);
+    else if (failed)
+        fprintf(stderr, "ljgapd: job %s: its end was written once the job store was back\n",
+                rec->id);
     if (ljgap_jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL) !=
         LJGAP_JOBSTORE_OK)
         log_store(js, "cannot evict finished jobs", NULL);
@@ -395,7 +414,7 @@ int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t
     memcpy(id, fresh, sizeof fresh);
     pthread_mutex_lock(&js->lock);
     js->submitted++;
-    pthread_cond_signal(&js->work);
+    pthread_cond_broadcast(&js->work);
     pthread_mutex_unlock(&js->lock);
     return LJGAP_JOBS_OK;
 }

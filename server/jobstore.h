@@ -4,9 +4,9 @@
  * state, progress, timestamps and its answer. It knows nothing of HTTP or physics: a request
  * and an answer are opaque bytes to it (the answer is JSON text by convention), a kind is a
  * short name the job runner (jobs.h) maps to a function. Backends implement the table of
- * operations below; today there is one, SQLite (jobstore_sqlite.c, one process owns a state
- * directory), and the interface is shaped so that a shared one (PostgreSQL, several daemons on
- * one queue) needs no other calls:
+ * operations below: SQLite (jobstore_sqlite.c: one process owns a state directory) and
+ * PostgreSQL (jobstore_pg.c: several daemons, on several machines, share one queue), with the
+ * same semantics:
  *
  *   - a worker claims a job with a lease (claim) and renews it while it runs (renew); a
  *     running job whose lease lapsed can be claimed again (its worker died), and the claim
@@ -112,6 +112,7 @@ typedef struct {
 /* The head of every backend's handle (a backend's struct starts with it). */
 struct ljgap_jobstore {
     const ljgap_jobstore_ops *ops;
+    const char *where; /* for messages: the database file, or the URL without its password */
 };
 
 /* ---- opening: one function per backend ---- */
@@ -124,6 +125,43 @@ struct ljgap_jobstore {
  * and uncreatable, not a directory, not writable, in use by another process, not a database,
  * corrupt, a schema newer than this program knows. */
 int ljgap_jobstore_open_sqlite(const char *dir, ljgap_jobstore **out, char *err, size_t errlen);
+
+/* Opens the PostgreSQL job store at url (postgresql://[user[:password]@]host[:port]/dbname[?...],
+ * or postgres://; anything libpq takes in a URI), shared by every daemon pointed at it: connects
+ * (within 5 s), checks the server (9.5 or newer, UTF8 encoding), and creates or migrates its
+ * schema `ljgapd` (tables schema_version and jobs) under an advisory lock, so daemons starting
+ * together migrate once. Running jobs are left alone: other daemons may be running them, and a
+ * job whose daemon died is claimed again once its lease lapses. Afterwards the store keeps at most
+ * max_conns connections (0: 4), opened as threads need them; an operation never waits more than
+ * 5 s for the database, and while the database is known to be unreachable operations fail at
+ * once (LJGAP_JOBSTORE_ERROR) and one of them tries to reconnect every second. On failure
+ * returns LJGAP_JOBSTORE_ERROR, NOMEM or INVALID (not such a URL) with one line in err naming
+ * the database (never the password) and the reason. */
+int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore **out, char *err,
+                           size_t errlen);
+
+/* The columns of one job row as the PostgreSQL backend reads them, in text format: */
+enum {
+    LJGAP_PG_ID,       /* text */
+    LJGAP_PG_KIND,     /* text */
+    LJGAP_PG_STATE,    /* text */
+    LJGAP_PG_PROGRESS, /* float8 ("NaN", "Infinity" too) */
+    LJGAP_PG_CREATED,  /* Unix seconds as float8, or NULL */
+    LJGAP_PG_STARTED,
+    LJGAP_PG_FINISHED,
+    LJGAP_PG_CANCEL,  /* bool: "t" or "f" */
+    LJGAP_PG_RUN,     /* int8 */
+    LJGAP_PG_LOST,    /* int8 */
+    LJGAP_PG_ANSWER,  /* text, or NULL */
+    LJGAP_PG_NOW,     /* the database's clock, Unix seconds */
+    LJGAP_PG_REQUEST, /* bytea in hex ("\x7b7d"): claim only */
+    LJGAP_PG_COLS
+};
+/* Fills the zeroed *rec from a row's values (val[i] NULL for SQL NULL, len[i] its bytes; ncols
+ * is LJGAP_PG_REQUEST or LJGAP_PG_COLS), trusting none of them: a text that does not fit is "",
+ * an unknown state LJGAP_JOB_BAD, a number that does not parse 0, a request that is not hex
+ * empty. 0, or LJGAP_JOBSTORE_NOMEM (rec cleared). The backend's reading, and the fuzzer's. */
+int ljgap_jobstore_pg_row(ljgap_job_record *rec, const char *const *val, const int *len, int ncols);
 
 /* Closes the store (NULL is fine). Running jobs stay as they are in the database. */
 void ljgap_jobstore_close(ljgap_jobstore *st);

@@ -651,6 +651,7 @@ int ljgap_jobstore_open_sqlite(const char *dir, ljgap_jobstore **out, char *err,
     s->base.ops = &sqlite_ops;
     s->lock_fd = -1;
     pthread_mutex_init(&s->lock, NULL);
+    s->base.where = s->path;
     sprintf(s->path, "%s/jobs.sqlite", dir);
 
     if (make_dirs(dir, failed, sizeof failed) != 0) {

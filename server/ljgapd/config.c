@@ -19,7 +19,8 @@ static void usage(FILE *f)
         f,
         "usage: ljgapd [--port N] [--bind ADDR] [--web DIR] [--compute-slots N] [--queue N]\n"
         "              [--queue-wait S] [--max-seconds S] [--connections N]\n"
-        "              [--client-connections N] [--trust-proxy] [--state-dir DIR]\n"
+        "              [--client-connections N] [--trust-proxy]\n"
+        "              [--state-dir DIR | --jobs-db postgresql://...] [--job-lease S]\n"
         "              [more: see below]\n"
         "Serves the ljgap calculations over HTTP (see /openapi.json).\n"
         "Listening\n"
@@ -63,6 +64,17 @@ static void usage(FILE *f)
         "                        ljgapd per DIR (default: $STATE_DIRECTORY as systemd sets it,\n"
         "                        else $XDG_STATE_HOME/ljgapd, else ~/.local/state/ljgapd); a\n"
         "                        DIR that cannot be used is exit status 2\n"
+        "  --jobs-db URL         keep them in PostgreSQL instead: a postgresql:// URL (libpq's\n"
+        "                        form: postgresql://USER@HOST:PORT/DBNAME; a password is better\n"
+        "                        kept in ~/.pgpass or $PGPASSWORD than in the URL). Every ljgapd\n"
+        "                        given the same database shares one queue: any of them answers\n"
+        "                        for any job, and their workers take jobs from it. The schema is\n"
+        "                        created or migrated at start; a database that cannot be used\n"
+        "                        then is exit status 2; lost later, the job routes answer 503\n"
+        "                        + Retry-After until it is back. Not with --state-dir\n"
+        "  --job-lease S         a running job's lease in seconds, renewed every third of it\n"
+        "                        (default 30); a job whose ljgapd died is run again from the\n"
+        "                        start by another (or the next) ljgapd once its lease lapses\n"
         "The first line on stdout is 'listening on http://HOST:PORT/'; one log line per\n"
         "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n");
 }
@@ -141,6 +153,8 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
         {"job-seconds", required_argument, NULL, 'S'},
         {"job-threads", required_argument, NULL, 'T'},
         {"state-dir", required_argument, NULL, 'D'},
+        {"jobs-db", required_argument, NULL, 'J'},
+        {"job-lease", required_argument, NULL, 'L'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -215,6 +229,14 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             c->state_dir = optarg;
             bad = !optarg[0];
             break;
+        case 'J':
+            c->jobs_db = optarg;
+            bad = strncmp(optarg, "postgresql://", 13) != 0 &&
+                  strncmp(optarg, "postgres://", 11) != 0;
+            break;
+        case 'L':
+            bad = parse_seconds(optarg, 3600, &c->jobs.lease_seconds) || c->jobs.lease_seconds < 1;
+            break;
         case 'h':
             usage(stdout);
             return 1;
@@ -226,12 +248,20 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             const struct option *opt = opts;
             while (opt->val != o)
                 opt++;
-            fprintf(stderr, "ljgapd: bad value '%s' for --%s\n", optarg, opt->name);
+            if (o == 'J') /* never echoed: the URL may hold a password */
+                fprintf(stderr, "ljgapd: --jobs-db wants a postgresql:// (or postgres://) URL\n");
+            else
+                fprintf(stderr, "ljgapd: bad value '%s' for --%s\n", optarg, opt->name);
             return -1;
         }
     }
     if (optind < argc) {
         usage(stderr);
+        return -1;
+    }
+    if (c->jobs_db && c->state_dir) {
+        fprintf(stderr, "ljgapd: --jobs-db and --state-dir exclude each other: the jobs are kept "
+                        "in one place\n");
         return -1;
     }
     return 0;

@@ -58,6 +58,7 @@ typedef struct {
     unsigned job_retry;          /* Retry-After seconds when the job queue is full (10) */
     double cancel_wait_s;        /* DELETE waits this long for a running job to stop (2) */
     const char *state_dir;       /* where the jobs are kept (--state-dir, or main.c's default) */
+    const char *jobs_db;         /* or a postgresql:// URL (--jobs-db): a store shared by many */
 } ljgapd_config;
 
 /* Fills c from argv (defaults first); -1 after printing why (exit 2), 1 after --help (exit 0). */

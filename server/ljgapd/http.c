@@ -247,8 +247,10 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     request *r = *con_cls;
 
     if (!r) return;
-    fprintf(stderr, "%s %s %d %.1fms id=%s%s%s\n", r->method, r->path, r->status,
-            1e3 * seconds_since(&r->t0), r->id, r->note,
+    /* behind a proxy the remote address is the proxy's: name the client it forwarded */
+    fprintf(stderr, "%s %s %d %.1fms id=%s%s%s%s%s\n", r->method, r->path, r->status,
+            1e3 * seconds_since(&r->t0), r->id, srv.cfg.trust_proxy ? " client=" : "",
+            srv.cfg.trust_proxy ? r->client : "", r->note,
             toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "" : " (connection closed early)");
     conns_idle(srv.conns, r->rec);
     if (r->counted) conns_client_leave(srv.conns, r->client);

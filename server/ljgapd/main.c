@@ -13,9 +13,10 @@
  *     request whose client hangs up leaves the queue, or has its computation cancelled.
  *   - a cache of identical requests' answers, served without a slot; /healthz, /version,
  *     /openapi.json and the page's files never wait.
- *   - simulation jobs are kept in SQLite in the state directory (--state-dir; jobstore.h), so
- *     they survive a restart or a crash, and run in the background (jobs.h). A state directory
- *     that cannot be used stops the start with exit status 2: there is no job store in memory.
+ *   - simulation jobs are kept in SQLite in the state directory (--state-dir; jobstore.h), or
+ *     in PostgreSQL (--jobs-db URL) shared by several daemons behind one proxy, so they survive
+ *     a restart or a crash, and run in the background (jobs.h). A store that cannot be used
+ *     stops the start with exit status 2: there is no job store in memory.
  *   - shutdown: SIGINT/SIGTERM are taken by sigwait() here. The daemon stops accepting
  *     (MHD_quiesce_daemon); running simulations stop and go back to the queue (the next start
  *     runs them); requests waiting for a slot get 503; computations may finish for a grace
@@ -92,23 +93,37 @@ static const char *default_state_dir(char *buf, size_t n)
     return len > 0 && (size_t)len < n ? buf : NULL;
 }
 
-/* Opens the job store in cfg.state_dir (or the default); 0, or -1 with the reason said. */
+/* Opens the job store: PostgreSQL at cfg.jobs_db, else SQLite in cfg.state_dir (or the
+ * default); 0, or -1 with the reason said. */
 static int store_open(char *buf, size_t n)
 {
     char err[600];
     unsigned queued = 0, running = 0;
-    if (!srv.cfg.state_dir && !(srv.cfg.state_dir = default_state_dir(buf, n))) {
-        fprintf(stderr, "ljgapd: no state directory: give --state-dir DIR (neither "
-                        "$STATE_DIRECTORY, $XDG_STATE_HOME nor $HOME is set)\n");
-        return -1;
-    }
-    if (ljgap_jobstore_open_sqlite(srv.cfg.state_dir, &srv.store, err, sizeof err) !=
-        LJGAP_JOBSTORE_OK) {
-        fprintf(stderr, "ljgapd: cannot use the state directory: %s\n", err);
-        return -1;
+    if (srv.cfg.jobs_db) {
+        /* a connection for each thread that uses the store: workers, keeper, ops, main */
+        if (ljgap_jobstore_open_pg(srv.cfg.jobs_db, srv.cfg.jobs.workers + OPS_THREADS + 2,
+                                   &srv.store, err, sizeof err) != LJGAP_JOBSTORE_OK) {
+            fprintf(stderr, "ljgapd: %s\n", err);
+            return -1;
+        }
+    } else {
+        if (!srv.cfg.state_dir && !(srv.cfg.state_dir = default_state_dir(buf, n))) {
+            fprintf(stderr, "ljgapd: no state directory: give --state-dir DIR (neither "
+                            "$STATE_DIRECTORY, $XDG_STATE_HOME nor $HOME is set)\n");
+            return -1;
+        }
+        if (ljgap_jobstore_open_sqlite(srv.cfg.state_dir, &srv.store, err, sizeof err) !=
+            LJGAP_JOBSTORE_OK) {
+            fprintf(stderr, "ljgapd: cannot use the state directory: %s\n", err);
+            return -1;
+        }
     }
     ljgap_jobstore_counts(srv.store, &queued, &running);
-    fprintf(stderr, "ljgapd: jobs kept in %s/jobs.sqlite (%u queued)\n", srv.cfg.state_dir, queued);
+    if (srv.cfg.jobs_db)
+        fprintf(stderr, "ljgapd: jobs kept in %s, shared (%u queued, %u running), lease %g s\n",
+                srv.store->where, queued, running, srv.cfg.jobs.lease_seconds);
+    else
+        fprintf(stderr, "ljgapd: jobs kept in %s (%u queued)\n", srv.store->where, queued);
     return 0;
 }
 

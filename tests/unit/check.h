@@ -1,8 +1,10 @@
-/* check.h -- numeric assertion shared by the cmocka test programs (include after cmocka.h). */
+/* check.h -- a numeric assertion and a sleep shared by the cmocka test programs (include after
+ * cmocka.h). */
 #ifndef LJGAP_TEST_CHECK_H
 #define LJGAP_TEST_CHECK_H
 
 #include <math.h>
+#include <time.h>
 
 /* |a - b| <= tol, printing both at full precision when not */
 #define assert_close(a, b, tol)                                                                    \
@@ -14,5 +16,11 @@
             fail();                                                                                \
         }                                                                                          \
     } while (0)
+
+static inline void sleep_ms(int ms)
+{
+    struct timespec t = {ms / 1000, (long)(ms % 1000) * 1000000L};
+    nanosleep(&t, NULL);
+}
 
 #endif

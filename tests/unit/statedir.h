@@ -4,6 +4,8 @@
 #ifndef LJGAP_TEST_STATEDIR_H
 #define LJGAP_TEST_STATEDIR_H
 
+#include "check.h"
+
 #include <sqlite3.h>
 
 #include <ftw.h>
@@ -58,12 +60,6 @@ static void statedir_sql(const char *dir, const char *sql)
         fail();
     }
     sqlite3_close(db);
-}
-
-static void sleep_ms(int ms)
-{
-    struct timespec t = {ms / 1000, (long)(ms % 1000) * 1000000L};
-    nanosleep(&t, NULL);
 }
 
 #endif

@@ -1,0 +1,1045 @@
+/* jobstore_pg.c -- the job store in PostgreSQL: one queue shared by every ljgapd pointed at it.
+ *
+ * Several daemons, on several machines, open the same database (ljgapd --jobs-db URL) and so
+ * share one queue: any of them answers for any job id, and their workers take jobs from it.
+ * The semantics are the SQLite backend's (jobstore.h); what sharing adds:
+ *
+ *   - claim takes the oldest job that is queued, or running with a lapsed lease (its daemon
+ *     died), with SELECT ... FOR UPDATE SKIP LOCKED: two workers never take the same job, and
+ *     none waits for another's row lock;
+ *   - the clock is the database's now(), one clock for every daemon, so leases and times do not
+ *     depend on the machines' clocks agreeing;
+ *   - create checks the queue cap and inserts under a transaction-scoped advisory lock
+ *     (ljgapd.create_job), so daemons submitting at once never overfill the queue;
+ *   - opening never requeues running jobs (another daemon may be running them): a dead daemon's
+ *     jobs come back when their leases lapse;
+ *   - the schema lives in its own PostgreSQL schema `ljgapd` (tables schema_version and jobs),
+ *     created or migrated at open under an advisory lock, so daemons starting together migrate
+ *     once and a shared database's other tables are left alone.
+ *
+ * Connections: a small pool (max_conns, opened as threads need them, kept while they work).
+ * Every operation takes a connection, runs one statement (or one function call) in autocommit
+ * and gives the connection back; libpq is used asynchronously with poll(), so an operation
+ * never waits more than OP_S seconds for anything (a free connection, connecting, the answer),
+ * whatever the network does. An idle connection is checked before use (readable while idle
+ * means the server closed it, as a restart does) and replaced.
+ *
+ * Failures: a connection that breaks is dropped; reads, renewals, cancels, evictions and claims
+ * are tried once more on a fresh connection (their repetition is harmless), creates, finishes and
+ * releases are not (the first may have committed). When connecting fails or the database stops
+ * answering, the store is down: for RETRY_S every operation fails at once with the reason, then
+ * one operation tries to connect again (the job workers' polling makes that happen by itself).
+ * So the HTTP job routes answer 503 quickly while the database is away, and work again when it
+ * is back.
+ *
+ * Reading back: rows come in libpq's text format and are parsed by ljgap_jobstore_pg_row, which
+ * trusts nothing (the fuzzer feeds it); jobstatus.h checks the record before a client sees it.
+ *
+ * Secrets: the URL may hold a password. Messages name the database as
+ * postgresql://user@host:port/dbname and every form of the password is scrubbed from what
+ * libpq says.
+ */
+#include "jobstore.h"
+
+#include <libpq-fe.h>
+
+#include <errno.h>
+#include <math.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define OP_S 5.0    /* the longest an operation waits for the database */
+#define RETRY_S 1.0 /* while the database is down, a new connection is tried this often */
+#define CONNS_DEFAULT 4
+#define LOCK_KEY "1279936324" /* advisory lock class: 0x4c4a4744, "LJGD" (with 0: migrations) */
+#define SECRETS 4             /* forms of the password scrubbed from messages */
+#define MSG_MAX 400
+
+/* migrations[v] brings the schema from version v to v + 1 (the schema ljgapd and its table
+ * schema_version exist already). */
+static const char *const migrations[] = {
+    /* 0 -> 1: the jobs table, and the two functions that need a lock */
+    "CREATE TABLE ljgapd.jobs ("
+    "  seq bigserial PRIMARY KEY," /* submission order: the queue is FIFO */
+    "  id text NOT NULL UNIQUE CHECK (id ~ '^[0-9a-f]{32}$'),"
+    "  kind text NOT NULL CHECK (kind ~ '^[a-z0-9_]{1,31}$'),"
+    "  request bytea NOT NULL," /* the body as submitted */
+    "  state text NOT NULL CHECK (state IN ('queued','running','done','failed','cancelled')),"
+    "  progress float8 NOT NULL DEFAULT 0 CHECK (progress BETWEEN 0 AND 1),"
+    "  created timestamptz NOT NULL DEFAULT now(),"
+    "  started timestamptz,"                   /* the current (or last) run's start */
+    "  finished timestamptz,"                  /* when it reached done, failed or cancelled */
+    "  cancel boolean NOT NULL DEFAULT false," /* a cancel was requested while it ran */
+    "  run bigint NOT NULL DEFAULT 0,"         /* claims so far: the lease token */
+    "  lost bigint NOT NULL DEFAULT 0,"        /* runs that ended without finishing */
+    "  owner text,"                            /* who runs it (host:pid), for the curious */
+    "  lease_until timestamptz,"               /* a running job's lease */
+    "  answer text"                            /* result (done) or problem (failed, cancelled) */
+    ");"
+    "CREATE INDEX jobs_live ON ljgapd.jobs (seq) WHERE state IN ('queued', 'running');"
+    "CREATE INDEX jobs_finished ON ljgapd.jobs (finished) WHERE state NOT IN ('queued', "
+    "'running');"
+    /* the queue cap and the insert under one lock: concurrent creates never overfill it (in
+     * read committed, the count after the lock sees every insert committed before it) */
+    "CREATE FUNCTION ljgapd.create_job(p_id text, p_kind text, p_request bytea, p_cap bigint) "
+    "RETURNS boolean LANGUAGE plpgsql AS $$ BEGIN "
+    "  PERFORM pg_advisory_xact_lock(" LOCK_KEY ", 1);"
+    "  IF p_cap > 0 AND (SELECT count(*) FROM ljgapd.jobs WHERE state = 'queued') >= p_cap THEN"
+    "    RETURN false;"
+    "  END IF;"
+    "  INSERT INTO ljgapd.jobs (id, kind, request, state) VALUES (p_id, p_kind, p_request, "
+    "  'queued');"
+    "  RETURN true;"
+    "END $$;"
+    /* one eviction at a time across daemons; the others skip theirs */
+    "CREATE FUNCTION ljgapd.evict(p_keep_seconds float8, p_keep bigint) "
+    "RETURNS bigint LANGUAGE plpgsql AS $$ DECLARE n bigint; BEGIN "
+    "  IF NOT pg_try_advisory_xact_lock(" LOCK_KEY ", 2) THEN RETURN 0; END IF;"
+    "  DELETE FROM ljgapd.jobs WHERE state NOT IN ('queued', 'running') AND "
+    "    (coalesce(finished, 'epoch') < now() - p_keep_seconds * interval '1 second' OR "
+    "     seq NOT IN (SELECT seq FROM ljgapd.jobs WHERE state NOT IN ('queued', 'running') "
+    "                 ORDER BY finished DESC NULLS LAST, seq DESC LIMIT p_keep));"
+    "  GET DIAGNOSTICS n = ROW_COUNT;"
+    "  RETURN n;"
+    "END $$;",
+};
+#define SCHEMA_VERSION ((int)(sizeof migrations / sizeof migrations[0]))
+
+/* The columns of a record (table alias j), in LJGAP_PG_* order. */
+#define RECORD_COLS                                                                                \
+    "j.id, j.kind, j.state, j.progress, extract(epoch FROM j.created)::float8, "                   \
+    "extract(epoch FROM j.started)::float8, extract(epoch FROM j.finished)::float8, j.cancel, "    \
+    "j.run, j.lost, j.answer, extract(epoch FROM now())::float8"
+
+static const char sql_create[] = "SELECT ljgapd.create_job($1, $2, $3::bytea, $4::int8)";
+static const char sql_claim[] =
+    "UPDATE ljgapd.jobs j SET state = 'running', run = j.run + 1, "
+    "lost = j.lost + CASE WHEN j.state = 'running' THEN 1 ELSE 0 END, started = now(), "
+    "progress = 0, lease_until = now() + $2::float8 * interval '1 second', owner = $1 "
+    "FROM (SELECT seq FROM ljgapd.jobs WHERE state = 'queued' OR (state = 'running' AND "
+    "lease_until < now()) ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED) c WHERE j.seq = c.seq "
+    "RETURNING " RECORD_COLS ", j.request";
+static const char sql_renew[] =
+    "UPDATE ljgapd.jobs SET progress = greatest(progress, $3::float8), "
+    "lease_until = now() + $4::float8 * interval '1 second' "
+    "WHERE id = $1 AND run = $2::int8 AND state = 'running' RETURNING cancel";
+static const char sql_finish[] =
+    "UPDATE ljgapd.jobs SET state = $3::text, answer = $4, finished = now(), lease_until = NULL, "
+    "owner = NULL, progress = CASE WHEN $3::text = 'done' THEN 1 ELSE progress END "
+    "WHERE id = $1 AND run = $2::int8 AND state = 'running'";
+static const char sql_release[] =
+    "UPDATE ljgapd.jobs SET state = 'queued', started = NULL, progress = 0, lease_until = NULL, "
+    "owner = NULL WHERE id = $1 AND run = $2::int8 AND state = 'running'";
+static const char sql_get[] = "SELECT " RECORD_COLS " FROM ljgapd.jobs j WHERE j.id = $1";
+static const char sql_cancel[] =
+    "UPDATE ljgapd.jobs j SET state = CASE j.state WHEN 'queued' THEN 'cancelled' ELSE j.state "
+    "END, finished = CASE j.state WHEN 'queued' THEN now() ELSE j.finished END, "
+    "cancel = CASE j.state WHEN 'running' THEN true ELSE j.cancel END "
+    "WHERE j.id = $1 AND j.state IN ('queued', 'running') RETURNING " RECORD_COLS;
+static const char sql_counts[] =
+    "SELECT count(*) FILTER (WHERE state = 'queued'), count(*) FILTER (WHERE state = 'running') "
+    "FROM ljgapd.jobs WHERE state IN ('queued', 'running')";
+static const char sql_evict[] = "SELECT ljgapd.evict($1::float8, $2::int8)";
+
+/* Session settings of every connection: the server gives up when we do; bytea in hex and
+ * floats in full precision, which is what ljgap_jobstore_pg_row reads. */
+static const char sql_session[] =
+    "SET statement_timeout = 5000; SET lock_timeout = 4000; SET bytea_output = 'hex'; "
+    "SET extra_float_digits = 3";
+
+typedef struct {
+    ljgap_jobstore base;   /* the operations; first, so a ljgap_jobstore * points here */
+    pthread_mutex_t lock;  /* guards the pool and the down state below */
+    pthread_cond_t freed;  /* a connection was given back, or the store went down */
+    PGconn **idle;         /* connections not in use (max of them at most) */
+    unsigned n_idle;       /* entries in idle */
+    unsigned open;         /* connections open or being opened, in use or idle */
+    unsigned max;          /* most connections open at once */
+    int down;              /* connecting failed or the database stopped answering */
+    int probing;           /* a thread is trying to connect while down */
+    double retry_at;       /* while down: when the next connection may be tried */
+    char reason[MSG_MAX];  /* while down: why */
+    const char *keys[12];  /* libpq connection keywords ... */
+    const char *vals[12];  /* ... and values, the URL last but one */
+    char *url;             /* the URL as given */
+    char *safe;            /* postgresql://user@host:port/dbname: for messages */
+    char *secret[SECRETS]; /* the password as given and decoded, or NULL */
+} pg_store;
+
+typedef enum { X_OK, X_BROKEN, X_TIMEOUT } exec_fail;
+
+static double mono(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ---- messages: one line, no password ---- */
+
+/* Copies msg into out (cap bytes) on one line (runs of newlines, tabs and spaces become one
+ * space, trailing space dropped) with every form of the password replaced by "***". */
+static void clean_msg(const pg_store *s, const char *msg, char *out, size_t cap)
+{
+    size_t o = 0;
+    if (!cap) return;
+    for (const char *p = msg ? msg : ""; *p && o + 1 < cap;) {
+        size_t hit = 0;
+        for (int i = 0; i < SECRETS && !hit; i++)
+            if (s->secret[i] && s->secret[i][0] &&
+                strncmp(p, s->secret[i], strlen(s->secret[i])) == 0)
+                hit = strlen(s->secret[i]);
+        if (hit) {
+            for (const char *r = "***"; *r && o + 1 < cap; r++)
+                out[o++] = *r;
+            p += hit;
+            continue;
+        }
+        if (*p == '\n' || *p == '\t' || *p == '\r' || *p == ' ') {
+            if (o > 0 && out[o - 1] != ' ') out[o++] = ' ';
+        } else {
+            out[o++] = *p;
+        }
+        p++;
+    }
+    while (o > 0 && out[o - 1] == ' ')
+        o--;
+    out[o] = '\0';
+}
+
+/* Sets the calling thread's error: "<where>: <what>: <why>". */
+static void set_error(const pg_store *s, const char *what, const char *why)
+{
+    char clean[MSG_MAX];
+    clean_msg(s, why, clean, sizeof clean);
+    ljgap_jobstore_set_errmsg("%s: %s: %s", s->safe, what, clean);
+}
+
+static int hexval(char c)
+{
+    return c >= '0' && c <= '9'   ? c - '0'
+           : c >= 'a' && c <= 'f' ? c - 'a' + 10
+           : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                  : -1;
+}
+
+/* A malloc'd copy of the percent-decoded s[0..n) (invalid escapes kept as they are). */
+static char *pct_decode(const char *s, size_t n)
+{
+    char *d = malloc(n + 1), *o = d;
+    if (!d) return NULL;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] == '%' && i + 2 < n && hexval(s[i + 1]) >= 0 && hexval(s[i + 2]) >= 0) {
+            *o++ = (char)(hexval(s[i + 1]) * 16 + hexval(s[i + 2]));
+            i += 2;
+        } else {
+            *o++ = s[i];
+        }
+    }
+    *o = '\0';
+    return d;
+}
+
+/* Finds the password in url however it is written (user:PASSWORD@ in the authority, or a
+ * password= query parameter; raw and percent-decoded), so that no message shows it, whether or
+ * not libpq can parse the URL. */
+static void find_secrets(pg_store *s, const char *url)
+{
+    const char *auth = strstr(url, "://"), *end, *at = NULL, *colon, *q;
+    int n = 0;
+    if (auth) {
+        auth += 3;
+        end = auth + strcspn(auth, "/?#");
+        for (const char *p = auth; p < end; p++)
+            if (*p == '@') at = p;
+        colon = at ? memchr(auth, ':', (size_t)(at - auth)) : NULL;
+        if (colon && at > colon + 1) {
+            s->secret[n++] = strndup(colon + 1, (size_t)(at - colon - 1));
+            s->secret[n++] = pct_decode(colon + 1, (size_t)(at - colon - 1));
+        }
+    }
+    for (q = strstr(url, "password="); q && n + 2 <= SECRETS; q = strstr(q + 1, "password=")) {
+        const char *v = q + strlen("password=");
+        size_t len = strcspn(v, "&#");
+        if (len) {
+            s->secret[n++] = strndup(v, len);
+            s->secret[n++] = pct_decode(v, len);
+        }
+    }
+}
+
+/* The option named key of a parsed conninfo, or NULL when unset or empty. */
+static const char *opt(const PQconninfoOption *o, const char *key)
+{
+    for (; o && o->keyword; o++)
+        if (strcmp(o->keyword, key) == 0) return o->val && o->val[0] ? o->val : NULL;
+    return NULL;
+}
+
+/* ---- connections ---- */
+
+static void quiet(void *arg, const char *message)
+{
+    (void)arg, (void)message; /* notices (and a FATAL before a close) are no log lines of ours */
+}
+
+/* Waits until fd is ready for events or deadline (mono) passes: 1 ready, 0 timed out, -1 a
+ * bad descriptor. */
+static int wait_socket(int fd, short events, double deadline)
+{
+    struct pollfd p = {fd, events, 0};
+    if (fd < 0) return -1;
+    for (;;) {
+        double left = deadline - mono();
+        int rc;
+        if (left <= 0) return 0;
+        rc = poll(&p, 1, (int)ceil(left * 1e3));
+        if (rc > 0) return 1;
+        if (rc == 0) return 0;
+        if (errno != EINTR) return -1;
+    }
+}
+
+/* Runs sql (with nparams >= 0 one statement with parameters; with nparams < 0 a text of
+ * statements without) on c, waiting at most until deadline. Returns its result (the first that
+ * failed, else the last) with *fail X_OK; NULL with X_BROKEN when the connection broke (or
+ * memory ran out), X_TIMEOUT when the deadline passed; the connection is then unusable. */
+static PGresult *pg_exec(PGconn *c, const char *sql, int nparams, const char *const *vals,
+                         const int *lens, const int *fmts, double deadline, exec_fail *fail)
+{
+    PGresult *res = NULL, *r;
+    int sent = nparams < 0 ? PQsendQuery(c, sql)
+                           : PQsendQueryParams(c, sql, nparams, NULL, vals, lens, fmts, 0);
+    *fail = X_BROKEN;
+    if (!sent) return NULL;
+    for (int f; (f = PQflush(c)) != 0;) {
+        int w;
+        if (f < 0) return NULL;
+        if ((w = wait_socket(PQsocket(c), POLLIN | POLLOUT, deadline)) <= 0) {
+            *fail = w == 0 ? X_TIMEOUT : X_BROKEN;
+            return NULL;
+        }
+        if (!PQconsumeInput(c)) return NULL;
+    }
+    for (;;) {
+        int w;
+        while (!PQisBusy(c)) {
+            if (!(r = PQgetResult(c))) {
+                if (res && PQstatus(c) == CONNECTION_OK) *fail = X_OK;
+                if (*fail != X_OK) PQclear(res);
+                return *fail == X_OK ? res : NULL;
+            }
+            if (res && PQresultStatus(res) == PGRES_FATAL_ERROR) {
+                PQclear(r);
+            } else {
+                PQclear(res);
+                res = r;
+            }
+        }
+        if ((w = wait_socket(PQsocket(c), POLLIN, deadline)) <= 0 || !PQconsumeInput(c)) {
+            *fail = w == 0 ? X_TIMEOUT : X_BROKEN;
+            PQclear(res);
+            return NULL;
+        }
+    }
+}
+
+/* Opens a connection by deadline, set up for pg_exec; NULL with the reason in why. */
+static PGconn *pg_connect(pg_store *s, double deadline, char *why, size_t cap)
+{
+    PGconn *c = PQconnectStartParams(s->keys, s->vals, 1);
+    PostgresPollingStatusType ps = PGRES_POLLING_WRITING;
+    const char *enc;
+    PGresult *res = NULL;
+    exec_fail fail;
+
+    if (!c) {
+        snprintf(why, cap, "out of memory");
+        return NULL;
+    }
+    while (PQstatus(c) != CONNECTION_BAD && ps != PGRES_POLLING_OK && ps != PGRES_POLLING_FAILED) {
+        int w = wait_socket(PQsocket(c), ps == PGRES_POLLING_READING ? POLLIN : POLLOUT, deadline);
+        if (w == 0) {
+            snprintf(why, cap, "no connection within %.0f s", OP_S);
+            PQfinish(c);
+            return NULL;
+        }
+        ps = w < 0 ? PGRES_POLLING_FAILED : PQconnectPoll(c);
+    }
+    if (PQstatus(c) != CONNECTION_OK) goto fail;
+    PQsetNoticeProcessor(c, quiet, NULL);
+    if (PQserverVersion(c) < 90500) {
+        snprintf(why, cap, "the server is PostgreSQL %d.%d; ljgapd needs 9.5 or newer",
+                 PQserverVersion(c) / 10000, PQserverVersion(c) / 100 % 100);
+        PQfinish(c);
+        return NULL;
+    }
+    enc = PQparameterStatus(c, "server_encoding");
+    if (!enc || strcmp(enc, "UTF8") != 0) {
+        snprintf(why, cap,
+                 "the database's encoding is %s; ljgapd keeps UTF-8 text in it and needs a UTF8 "
+                 "database (createdb -E UTF8 -T template0 ...)",
+                 enc ? enc : "unknown");
+        PQfinish(c);
+        return NULL;
+    }
+    if (PQsetnonblocking(c, 1) != 0 ||
+        !(res = pg_exec(c, sql_session, -1, NULL, NULL, NULL, deadline, &fail)) ||
+        PQresultStatus(res) != PGRES_COMMAND_OK) {
+        if (res) {
+            snprintf(why, cap, "%s", PQresultErrorMessage(res));
+            PQclear(res);
+            PQfinish(c);
+            return NULL;
+        }
+        if (fail == X_TIMEOUT) {
+            snprintf(why, cap, "no answer within %.0f s", OP_S);
+            PQfinish(c);
+            return NULL;
+        }
+        goto fail;
+    }
+    PQclear(res);
+    return c;
+fail:
+    snprintf(why, cap, "%s", PQerrorMessage(c));
+    PQfinish(c);
+    return NULL;
+}
+
+/* Marks the store down for RETRY_S with reason why (lock held). */
+static void mark_down(pg_store *s, const char *why)
+{
+    s->down = 1;
+    s->retry_at = mono() + RETRY_S;
+    clean_msg(s, why, s->reason, sizeof s->reason);
+    pthread_cond_broadcast(&s->freed);
+}
+
+/* Is idle connection c still usable? Readable while idle means the server said something
+ * unasked, which is what it does before closing (a restart, an administrator's kill). */
+static int idle_alive(PGconn *c)
+{
+    struct pollfd p = {PQsocket(c), POLLIN, 0};
+    if (PQstatus(c) != CONNECTION_OK || p.fd < 0) return 0;
+    return poll(&p, 1, 0) == 0;
+}
+
+/* Takes a connection for an operation ending by deadline: an idle one, or a new one while
+ * fewer than max are open. LJGAP_JOBSTORE_OK, or ERROR with the reason set (at once while the
+ * store is down). */
+static int take(pg_store *s, double deadline, PGconn **out)
+{
+    char why[MSG_MAX];
+    *out = NULL;
+    pthread_mutex_lock(&s->lock);
+    for (;;) {
+        if (s->n_idle) {
+            PGconn *c = s->idle[--s->n_idle];
+            if (idle_alive(c)) {
+                pthread_mutex_unlock(&s->lock);
+                *out = c;
+                return LJGAP_JOBSTORE_OK;
+            }
+            s->open--;
+            pthread_mutex_unlock(&s->lock);
+            PQfinish(c); /* dead: the server closed it */
+            pthread_mutex_lock(&s->lock);
+            continue;
+        }
+        if (s->down && (s->probing || mono() < s->retry_at)) {
+            snprintf(why, sizeof why, "%s", s->reason);
+            pthread_mutex_unlock(&s->lock);
+            ljgap_jobstore_set_errmsg("%s: the database is unreachable (%s); trying again every "
+                                      "%.0f s",
+                                      s->safe, why, RETRY_S);
+            return LJGAP_JOBSTORE_ERROR;
+        }
+        if (s->open < s->max) {
+            int probe = s->down;
+            PGconn *c;
+            s->open++;
+            s->probing |= probe;
+            pthread_mutex_unlock(&s->lock);
+            c = pg_connect(s, deadline, why, sizeof why);
+            pthread_mutex_lock(&s->lock);
+            if (probe) s->probing = 0;
+            if (!c) {
+                s->open--;
+                mark_down(s, why);
+                pthread_mutex_unlock(&s->lock);
+                set_error(s, "cannot connect", why);
+                return LJGAP_JOBSTORE_ERROR;
+            }
+            s->down = 0;
+            pthread_mutex_unlock(&s->lock);
+            *out = c;
+            return LJGAP_JOBSTORE_OK;
+        }
+        { /* every connection is in use: wait for one, or for the store to go down */
+            struct timespec t;
+            double left = deadline - mono();
+            if (left <= 0) {
+                pthread_mutex_unlock(&s->lock);
+                ljgap_jobstore_set_errmsg("%s: all %u connections stayed busy for %.0f s", s->safe,
+                                          s->max, OP_S);
+                return LJGAP_JOBSTORE_ERROR;
+            }
+            clock_gettime(CLOCK_MONOTONIC, &t);
+            t.tv_sec += (time_t)left;
+            t.tv_nsec += (long)((left - floor(left)) * 1e9);
+            if (t.tv_nsec >= 1000000000L) t.tv_sec++, t.tv_nsec -= 1000000000L;
+            pthread_cond_timedwait(&s->freed, &s->lock, &t);
+        }
+    }
+}
+
+/* Gives c back to the pool; or, with fail set, closes it (X_TIMEOUT also marks the store
+ * down: the database does not answer). */
+static void give(pg_store *s, PGconn *c, exec_fail fail)
+{
+    pthread_mutex_lock(&s->lock);
+    if (fail == X_OK && s->n_idle < s->max) {
+        s->idle[s->n_idle++] = c;
+        c = NULL;
+    } else {
+        s->open--;
+        if (fail == X_TIMEOUT) {
+            char why[64];
+            snprintf(why, sizeof why, "no answer within %.0f s", OP_S);
+            mark_down(s, why);
+        }
+    }
+    pthread_cond_broadcast(&s->freed);
+    pthread_mutex_unlock(&s->lock);
+    PQfinish(c); /* NULL is fine */
+}
+
+/* Runs one statement with text parameters (request, if not NULL, is parameter 3 in binary)
+ * on a pooled connection. Returns its result when its status is want; otherwise NULL with *st
+ * set (EXISTS for a unique violation, else ERROR or NOMEM, with the reason set for this
+ * thread). With retry, a connection that broke is replaced once and the statement run again. */
+static PGresult *run(pg_store *s, const char *what, const char *sql, int n, const char *const *vals,
+                     const char *request, size_t request_len, ExecStatusType want, int retry,
+                     int *st)
+{
+    double deadline = mono() + OP_S;
+    const char *v[8];
+    int lens[8] = {0}, fmts[8] = {0};
+    PGresult *res;
+    PGconn *c;
+    exec_fail fail;
+    const char *state;
+
+    for (int i = 0; i < n; i++)
+        v[i] = vals[i];
+    if (request) {
+        v[2] = request;
+        lens[2] = (int)request_len;
+        fmts[2] = 1;
+    }
+    for (;;) {
+        if ((*st = take(s, deadline, &c)) != LJGAP_JOBSTORE_OK) return NULL;
+        res = pg_exec(c, sql, n, v, lens, fmts, deadline, &fail);
+        if (fail == X_OK) break;
+        {
+            char why[MSG_MAX];
+            if (fail == X_TIMEOUT)
+                snprintf(why, sizeof why, "no answer within %.0f s", OP_S);
+            else
+                snprintf(why, sizeof why, "%s", PQerrorMessage(c));
+            give(s, c, fail);
+            if (fail == X_BROKEN && retry-- > 0 && mono() < deadline) continue;
+            set_error(s, what, why);
+            *st = LJGAP_JOBSTORE_ERROR;
+            return NULL;
+        }
+    }
+    give(s, c, X_OK);
+    if (PQresultStatus(res) == want) return res;
+    state = PQresultErrorField(res, PG_DIAG_SQLSTATE);
+    *st = state && strcmp(state, "23505") == 0   ? LJGAP_JOBSTORE_EXISTS
+          : state && strcmp(state, "53200") == 0 ? LJGAP_JOBSTORE_NOMEM
+          : !state && PQresultStatus(res) == PGRES_FATAL_ERROR &&
+                  !strcmp(PQresultErrorMessage(res), "out of memory\n")
+              ? LJGAP_JOBSTORE_NOMEM
+              : LJGAP_JOBSTORE_ERROR;
+    set_error(s, what,
+              PQresultStatus(res) == PGRES_FATAL_ERROR ? PQresultErrorMessage(res)
+                                                       : "unexpected answer from the server");
+    PQclear(res);
+    return NULL;
+}
+
+/* The number of rows a command changed (0 if it says nothing). */
+static long changed(PGresult *res)
+{
+    return strtol(PQcmdTuples(res), NULL, 10);
+}
+
+/* ---- reading rows ---- */
+
+/* Copies the text val (len bytes) into dst (cap bytes) when it fits without a NUL; else "". */
+static void text_short(const char *val, int len, char *dst, size_t cap)
+{
+    dst[0] = '\0';
+    if (val && len >= 0 && (size_t)len < cap && !memchr(val, '\0', (size_t)len)) {
+        memcpy(dst, val, (size_t)len);
+        dst[len] = '\0';
+    }
+}
+
+/* A float8's text ("NaN" and "Infinity" included); 0 for NULL or anything else. */
+static double number(const char *val, int len)
+{
+    char buf[64], *end;
+    double v;
+    if (!val || len <= 0 || (size_t)len >= sizeof buf) return 0;
+    memcpy(buf, val, (size_t)len);
+    buf[len] = '\0';
+    v = strtod(buf, &end);
+    return end != buf && *end == '\0' ? v : 0;
+}
+
+static long integer(const char *val, int len)
+{
+    char buf[32], *end;
+    long v;
+    if (!val || len <= 0 || (size_t)len >= sizeof buf) return 0;
+    memcpy(buf, val, (size_t)len);
+    buf[len] = '\0';
+    errno = 0;
+    v = strtol(buf, &end, 10);
+    return end != buf && *end == '\0' && errno == 0 ? v : 0;
+}
+
+int ljgap_jobstore_pg_row(ljgap_job_record *rec, const char *const *val, const int *len, int ncols)
+{
+    char state[16];
+    text_short(val[LJGAP_PG_ID], len[LJGAP_PG_ID], rec->id, sizeof rec->id);
+    text_short(val[LJGAP_PG_KIND], len[LJGAP_PG_KIND], rec->kind, sizeof rec->kind);
+    text_short(val[LJGAP_PG_STATE], len[LJGAP_PG_STATE], state, sizeof state);
+    rec->state = ljgap_job_state_parse(state);
+    rec->progress = number(val[LJGAP_PG_PROGRESS], len[LJGAP_PG_PROGRESS]);
+    rec->created = number(val[LJGAP_PG_CREATED], len[LJGAP_PG_CREATED]);
+    rec->started = number(val[LJGAP_PG_STARTED], len[LJGAP_PG_STARTED]);
+    rec->finished = number(val[LJGAP_PG_FINISHED], len[LJGAP_PG_FINISHED]);
+    rec->now = number(val[LJGAP_PG_NOW], len[LJGAP_PG_NOW]);
+    rec->cancel =
+        val[LJGAP_PG_CANCEL] && len[LJGAP_PG_CANCEL] == 1 && val[LJGAP_PG_CANCEL][0] == 't';
+    rec->run = integer(val[LJGAP_PG_RUN], len[LJGAP_PG_RUN]);
+    rec->lost = integer(val[LJGAP_PG_LOST], len[LJGAP_PG_LOST]);
+    if (val[LJGAP_PG_ANSWER] && len[LJGAP_PG_ANSWER] >= 0) {
+        size_t n = (size_t)len[LJGAP_PG_ANSWER];
+        if (!(rec->answer = malloc(n + 1))) goto nomem;
+        memcpy(rec->answer, val[LJGAP_PG_ANSWER], n);
+        rec->answer[n] = '\0';
+        rec->answer_len = n;
+    }
+    if (ncols > LJGAP_PG_REQUEST) { /* "\x" and pairs of hex digits; anything else is empty */
+        const char *h = val[LJGAP_PG_REQUEST];
+        int n = len[LJGAP_PG_REQUEST];
+        int ok = h && n >= 2 && h[0] == '\\' && h[1] == 'x' && n % 2 == 0;
+        size_t bytes = ok ? (size_t)(n - 2) / 2 : 0;
+        if (!(rec->request = malloc(bytes + 1))) goto nomem;
+        for (size_t i = 0; i < bytes && ok; i++) {
+            int hi = hexval(h[2 + 2 * i]), lo = hexval(h[3 + 2 * i]);
+            ok = hi >= 0 && lo >= 0;
+            rec->request[i] = (char)(hi * 16 + lo);
+        }
+        rec->request_len = ok ? bytes : 0;
+        rec->request[rec->request_len] = '\0';
+    }
+    return LJGAP_JOBSTORE_OK;
+nomem:
+    ljgap_job_record_clear(rec);
+    ljgap_jobstore_set_errmsg("out of memory reading a job");
+    return LJGAP_JOBSTORE_NOMEM;
+}
+
+/* Row 0 of res into rec (ncols: LJGAP_PG_REQUEST, or LJGAP_PG_COLS with the request). */
+static int read_row(PGresult *res, ljgap_job_record *rec, int ncols)
+{
+    const char *val[LJGAP_PG_COLS] = {0};
+    int len[LJGAP_PG_COLS] = {0};
+    if (PQnfields(res) != ncols) {
+        ljgap_jobstore_set_errmsg("the server answered %d columns, not %d", PQnfields(res), ncols);
+        return LJGAP_JOBSTORE_ERROR;
+    }
+    for (int i = 0; i < ncols; i++)
+        if (!PQgetisnull(res, 0, i)) {
+            val[i] = PQgetvalue(res, 0, i);
+            len[i] = PQgetlength(res, 0, i);
+        }
+    return ljgap_jobstore_pg_row(rec, val, len, ncols);
+}
+
+/* ---- the operations ---- */
+
+static int op_create(ljgap_jobstore *base, const char *id, const char *kind, const char *request,
+                     size_t len, unsigned max_queued)
+{
+    pg_store *s = (pg_store *)base;
+    char cap[16];
+    const char *v[4] = {id, kind, NULL, cap};
+    PGresult *res;
+    int st;
+    if (len > (size_t)1 << 30) return LJGAP_JOBSTORE_INVALID;
+    snprintf(cap, sizeof cap, "%u", max_queued);
+    res = run(s, "cannot add a job", sql_create, 4, v, request, len, PGRES_TUPLES_OK, 0, &st);
+    if (!res) return st;
+    st = PQntuples(res) == 1 && PQgetvalue(res, 0, 0)[0] == 't' ? LJGAP_JOBSTORE_OK
+                                                                : LJGAP_JOBSTORE_FULL;
+    PQclear(res);
+    return st;
+}
+
+static int op_claim(ljgap_jobstore *base, const char *owner, double lease_s, ljgap_job_record *rec)
+{
+    pg_store *s = (pg_store *)base;
+    char lease[32];
+    const char *v[2] = {owner, lease};
+    PGresult *res;
+    int st;
+    snprintf(lease, sizeof lease, "%.17g", lease_s);
+    res = run(s, "cannot claim a job", sql_claim, 2, v, NULL, 0, PGRES_TUPLES_OK, 1, &st);
+    if (!res) return st;
+    st = PQntuples(res) ? read_row(res, rec, LJGAP_PG_COLS) : LJGAP_JOBSTORE_EMPTY;
+    PQclear(res);
+    return st;
+}
+
+static int op_renew(ljgap_jobstore *base, const char *id, long run_, double progress,
+                    double lease_s, int *cancel)
+{
+    pg_store *s = (pg_store *)base;
+    char r[24], p[32], lease[32];
+    const char *v[4] = {id, r, p, lease};
+    PGresult *res;
+    int st;
+    snprintf(r, sizeof r, "%ld", run_);
+    snprintf(p, sizeof p, "%.17g", progress);
+    snprintf(lease, sizeof lease, "%.17g", lease_s);
+    res = run(s, "cannot renew a job's lease", sql_renew, 4, v, NULL, 0, PGRES_TUPLES_OK, 1, &st);
+    if (!res) return st;
+    st = PQntuples(res) ? LJGAP_JOBSTORE_OK : LJGAP_JOBSTORE_LOST;
+    if (st == LJGAP_JOBSTORE_OK) *cancel = PQgetvalue(res, 0, 0)[0] == 't';
+    PQclear(res);
+    return st;
+}
+
+static int op_finish(ljgap_jobstore *base, const char *id, long run_, ljgap_job_state state,
+                     const char *answer, size_t answer_len)
+{
+    pg_store *s = (pg_store *)base;
+    char r[24];
+    const char *v[4] = {id, r, ljgap_job_state_name(state), answer};
+    PGresult *res;
+    int st;
+    (void)answer_len; /* answer is NUL-terminated text */
+    snprintf(r, sizeof r, "%ld", run_);
+    res = run(s, "cannot write the end of a job", sql_finish, 4, v, NULL, 0, PGRES_COMMAND_OK, 0,
+              &st);
+    if (!res) return st;
+    st = changed(res) == 1 ? LJGAP_JOBSTORE_OK : LJGAP_JOBSTORE_LOST;
+    PQclear(res);
+    return st;
+}
+
+static int op_release(ljgap_jobstore *base, const char *id, long run_)
+{
+    pg_store *s = (pg_store *)base;
+    char r[24];
+    const char *v[2] = {id, r};
+    PGresult *res;
+    int st;
+    snprintf(r, sizeof r, "%ld", run_);
+    res = run(s, "cannot put back a job", sql_release, 2, v, NULL, 0, PGRES_COMMAND_OK, 0, &st);
+    if (!res) return st;
+    st = changed(res) == 1 ? LJGAP_JOBSTORE_OK : LJGAP_JOBSTORE_LOST;
+    PQclear(res);
+    return st;
+}
+
+/* Runs sql with the id as its parameter and reads the one record it returns into rec;
+ * LJGAP_JOBSTORE_UNKNOWN when it returns none. */
+static int record_by_id(pg_store *s, const char *what, const char *sql, const char *id,
+                        ljgap_job_record *rec)
+{
+    const char *v[1] = {id};
+    PGresult *res;
+    int st;
+    res = run(s, what, sql, 1, v, NULL, 0, PGRES_TUPLES_OK, 1, &st);
+    if (!res) return st;
+    st = PQntuples(res) ? read_row(res, rec, LJGAP_PG_REQUEST) : LJGAP_JOBSTORE_UNKNOWN;
+    PQclear(res);
+    return st;
+}
+
+static int op_get(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+{
+    return record_by_id((pg_store *)base, "cannot read a job", sql_get, id, rec);
+}
+
+static int op_cancel(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+{
+    int st = record_by_id((pg_store *)base, "cannot cancel a job", sql_cancel, id, rec);
+    /* not queued or running: finished (left as it is), unknown, or a damaged row */
+    return st == LJGAP_JOBSTORE_UNKNOWN ? op_get(base, id, rec) : st;
+}
+
+static int op_counts(ljgap_jobstore *base, unsigned *queued, unsigned *running)
+{
+    pg_store *s = (pg_store *)base;
+    PGresult *res;
+    int st;
+    res = run(s, "cannot count jobs", sql_counts, 0, NULL, NULL, 0, PGRES_TUPLES_OK, 1, &st);
+    if (!res) return st;
+    if (PQntuples(res) == 1 && PQnfields(res) == 2) {
+        *queued = (unsigned)strtoul(PQgetvalue(res, 0, 0), NULL, 10);
+        *running = (unsigned)strtoul(PQgetvalue(res, 0, 1), NULL, 10);
+    }
+    PQclear(res);
+    return LJGAP_JOBSTORE_OK;
+}
+
+static int op_evict(ljgap_jobstore *base, unsigned keep_done, double keep_seconds,
+                    unsigned *evicted)
+{
+    pg_store *s = (pg_store *)base;
+    char secs[32], keep[16];
+    const char *v[2] = {secs, keep};
+    PGresult *res;
+    int st;
+    snprintf(secs, sizeof secs, "%.17g", keep_seconds);
+    snprintf(keep, sizeof keep, "%u", keep_done);
+    res = run(s, "cannot evict finished jobs", sql_evict, 2, v, NULL, 0, PGRES_TUPLES_OK, 1, &st);
+    if (!res) return st;
+    if (PQntuples(res) == 1) *evicted = (unsigned)strtoul(PQgetvalue(res, 0, 0), NULL, 10);
+    PQclear(res);
+    return LJGAP_JOBSTORE_OK;
+}
+
+static void op_close(ljgap_jobstore *base)
+{
+    pg_store *s = (pg_store *)base;
+    for (unsigned i = 0; i < s->n_idle; i++)
+        PQfinish(s->idle[i]);
+    for (int i = 0; i < SECRETS; i++)
+        free(s->secret[i]);
+    free(s->idle);
+    free(s->url);
+    free(s->safe);
+    pthread_cond_destroy(&s->freed);
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+}
+
+static const ljgap_jobstore_ops pg_ops = {
+    .name = "postgresql",
+    .create = op_create,
+    .claim = op_claim,
+    .renew = op_renew,
+    .finish = op_finish,
+    .release = op_release,
+    .get = op_get,
+    .cancel = op_cancel,
+    .counts = op_counts,
+    .evict = op_evict,
+    .close = op_close,
+};
+
+/* ---- opening ---- */
+
+/* Runs sql on c (in the open's transaction); the result when it is want, else NULL with the
+ * reason in err. */
+static PGresult *open_exec(pg_store *s, PGconn *c, const char *sql, ExecStatusType want,
+                           double deadline, char *err, size_t errlen)
+{
+    exec_fail fail;
+    PGresult *res = pg_exec(c, sql, -1, NULL, NULL, NULL, deadline, &fail);
+    char why[MSG_MAX];
+    if (res && PQresultStatus(res) == want) return res;
+    clean_msg(s,
+              res                 ? PQresultErrorMessage(res)
+              : fail == X_TIMEOUT ? "no answer in time"
+                                  : PQerrorMessage(c),
+              why, sizeof why);
+    snprintf(err, errlen, "%s: cannot create or check the schema: %s", s->safe, why);
+    PQclear(res);
+    return NULL;
+}
+
+/* The schema: ours, at its latest version (migrating under the lock), or an error in err. */
+static int check_schema(pg_store *s, PGconn *c, char *err, size_t errlen)
+{
+    double deadline = mono() + 4 * OP_S;
+    PGresult *res = NULL;
+    long version = 0, tables = 0;
+    int has_schema, has_version, ok = -1;
+    char sql[96];
+
+    if (!(res = open_exec(s, c,
+                          "BEGIN; SELECT pg_advisory_xact_lock(" LOCK_KEY ", 0); "
+                          "SELECT to_regnamespace('ljgapd') IS NOT NULL, "
+                          "to_regclass('ljgapd.schema_version') IS NOT NULL, "
+                          "(SELECT count(*) FROM pg_class c JOIN pg_namespace n "
+                          "ON n.oid = c.relnamespace WHERE n.nspname = 'ljgapd')",
+                          PGRES_TUPLES_OK, deadline, err, errlen)))
+        goto end;
+    has_schema = PQgetvalue(res, 0, 0)[0] == 't';
+    has_version = PQgetvalue(res, 0, 1)[0] == 't';
+    tables = strtol(PQgetvalue(res, 0, 2), NULL, 10);
+    PQclear(res);
+    res = NULL;
+    if (has_schema && !has_version && tables > 0) {
+        snprintf(err, errlen,
+                 "%s: the schema ljgapd holds %ld tables or indexes but no schema_version: it is "
+                 "not an ljgapd job store (another program's?); drop it or use another database",
+                 s->safe, tables);
+        goto end;
+    }
+    if (has_version) {
+        if (!(res = open_exec(s, c, "SELECT max(version) FROM ljgapd.schema_version",
+                              PGRES_TUPLES_OK, deadline, err, errlen)))
+            goto end;
+        if (PQgetisnull(res, 0, 0)) {
+            snprintf(err, errlen, "%s: the job store is damaged: ljgapd.schema_version is empty",
+                     s->safe);
+            goto end;
+        }
+        version = strtol(PQgetvalue(res, 0, 0), NULL, 10);
+        PQclear(res);
+        res = NULL;
+    }
+    if (version > SCHEMA_VERSION || version < 0) {
+        snprintf(err, errlen,
+                 "%s: the job store has schema version %ld, and this ljgapd knows versions up "
+                 "to %d: it was written by a newer ljgapd; run that one, or use another database",
+                 s->safe, version, SCHEMA_VERSION);
+        goto end;
+    }
+    if (!has_version &&
+        !(res = open_exec(s, c,
+                          "CREATE SCHEMA IF NOT EXISTS ljgapd; "
+                          "CREATE TABLE ljgapd.schema_version (version integer NOT NULL); "
+                          "INSERT INTO ljgapd.schema_version VALUES (0)",
+                          PGRES_COMMAND_OK, deadline, err, errlen)))
+        goto end;
+    for (long v = version; v < SCHEMA_VERSION; v++) {
+        PQclear(res);
+        snprintf(sql, sizeof sql, "UPDATE ljgapd.schema_version SET version = %ld", v + 1);
+        if (!(res = open_exec(s, c, migrations[v], PGRES_COMMAND_OK, deadline, err, errlen)))
+            goto end;
+        PQclear(res);
+        if (!(res = open_exec(s, c, sql, PGRES_COMMAND_OK, deadline, err, errlen))) goto end;
+    }
+    PQclear(res);
+    if ((res = open_exec(s, c, "COMMIT", PGRES_COMMAND_OK, deadline, err, errlen))) ok = 0;
+end:
+    PQclear(res);
+    if (ok != 0 && PQstatus(c) == CONNECTION_OK) { /* leave the connection clean (or drop it) */
+        exec_fail fail;
+        PQclear(pg_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, mono() + OP_S, &fail));
+    }
+    return ok;
+}
+
+int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore **out, char *err,
+                           size_t errlen)
+{
+    pg_store *s = NULL;
+    PQconninfoOption *info = NULL;
+    PGconn *c = NULL;
+    char *perr = NULL, why[MSG_MAX];
+    const char *host, *port, *user, *db;
+    size_t safe_len;
+    int k = 0;
+
+    *out = NULL;
+    if (!url || (strncmp(url, "postgresql://", 13) != 0 && strncmp(url, "postgres://", 11) != 0)) {
+        snprintf(err, errlen, "the job database must be a postgresql:// URL");
+        return LJGAP_JOBSTORE_INVALID;
+    }
+    if (!(s = calloc(1, sizeof *s)) || !(s->url = strdup(url))) {
+        free(s);
+        snprintf(err, errlen, "out of memory");
+        return LJGAP_JOBSTORE_NOMEM;
+    }
+    s->base.ops = &pg_ops;
+    pthread_mutex_init(&s->lock, NULL);
+    {
+        pthread_condattr_t ca;
+        pthread_condattr_init(&ca);
+        pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+        pthread_cond_init(&s->freed, &ca);
+        pthread_condattr_destroy(&ca);
+    }
+    s->max = max_conns ? max_conns : CONNS_DEFAULT;
+    find_secrets(s, url);
+    s->safe = strdup("postgresql://");
+    if (!s->safe || !(s->idle = calloc(s->max, sizeof *s->idle))) {
+        snprintf(err, errlen, "out of memory");
+        op_close(&s->base);
+        return LJGAP_JOBSTORE_NOMEM;
+    }
+    s->base.where = s->safe;
+    if (!(info = PQconninfoParse(url, &perr))) {
+        clean_msg(s, perr ? perr : "out of memory", why, sizeof why);
+        snprintf(err, errlen, "the job database URL does not parse: %s", why);
+        PQfreemem(perr);
+        op_close(&s->base);
+        return LJGAP_JOBSTORE_INVALID;
+    }
+    host = opt(info, "host") ? opt(info, "host") : opt(info, "hostaddr");
+    port = opt(info, "port");
+    user = opt(info, "user");
+    db = opt(info, "dbname");
+    safe_len = 32 + (host ? strlen(host) : 0) + (port ? strlen(port) : 0) +
+               (user ? strlen(user) : 0) + (db ? strlen(db) : 0);
+    free(s->safe);
+    if (!(s->safe = malloc(safe_len))) {
+        PQconninfoFree(info);
+        snprintf(err, errlen, "out of memory");
+        s->base.where = NULL;
+        op_close(&s->base);
+        return LJGAP_JOBSTORE_NOMEM;
+    }
+    snprintf(s->safe, safe_len, "postgresql://%s%s%s%s%s/%s", user ? user : "", user ? "@" : "",
+             host ? host : "", port ? ":" : "", port ? port : "", db ? db : "");
+    s->base.where = s->safe;
+    PQconninfoFree(info);
+
+    /* our defaults first: the URL's own settings win (expand_dbname: later keys override) */
+    s->keys[k] = "connect_timeout", s->vals[k++] = "5";
+    s->keys[k] = "application_name", s->vals[k++] = "ljgapd";
+    s->keys[k] = "keepalives", s->vals[k++] = "1";
+    s->keys[k] = "keepalives_idle", s->vals[k++] = "10";
+    s->keys[k] = "keepalives_interval", s->vals[k++] = "5";
+    s->keys[k] = "keepalives_count", s->vals[k++] = "3";
+    s->keys[k] = "tcp_user_timeout", s->vals[k++] = "10000";
+    s->keys[k] = "dbname", s->vals[k++] = s->url;
+    s->keys[k] = "client_encoding", s->vals[k++] = "UTF8"; /* after the URL: always */
+    s->keys[k] = NULL, s->vals[k] = NULL;
+
+    if (!(c = pg_connect(s, mono() + OP_S, why, sizeof why))) {
+        char clean[MSG_MAX];
+        clean_msg(s, why, clean, sizeof clean);
+        snprintf(err, errlen, "cannot connect to the job database %s: %s", s->safe, clean);
+        op_close(&s->base);
+        return LJGAP_JOBSTORE_ERROR;
+    }
+    if (check_schema(s, c, err, errlen) != 0) {
+        PQfinish(c);
+        op_close(&s->base);
+        return LJGAP_JOBSTORE_ERROR;
+    }
+    s->open = 1;
+    give(s, c, X_OK);
+    *out = &s->base;
+    return LJGAP_JOBSTORE_OK;
+}
