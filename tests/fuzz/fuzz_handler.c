@@ -42,6 +42,12 @@
  * finite numbers, a known status, progress in [0, 1], elapsed_ms >= 0, a result object exactly
  * when done and a well-formed problem whenever it failed.
  *
+ * The pseudo-endpoint "@pgrow" fuzzes the PostgreSQL job store's reading of a row: the body's
+ * lines are the row's columns in libpq's text format (jobstore.h, LJGAP_PG_*; "\\N" for NULL;
+ * thirteen lines make a claim's row, with the request in bytea hex), read by
+ * ljgap_jobstore_pg_row into a record that must stay within its bounds and then pass the same
+ * checks as "@jobrow".
+ *
  * The handler's limits are lowered (fuzz_limits, and sim_control for simulations) so each
  * input runs in milliseconds; a computation that ignored them would trip libFuzzer's -timeout.
  *
@@ -51,6 +57,7 @@
 #include "forwarded.h"
 #include "handler.h"
 #include "jobstatus.h"
+#include "jobstore.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -308,18 +315,63 @@ static int next_line(const char **p, const char *end, char *buf, size_t size)
     return 1;
 }
 
+/* A record read back, shown as a status object (ep: the pseudo-endpoint, for messages), checked
+ * against the contract; frees the record. */
+static void check_record(const char *ep, ljgap_job_record *rec)
+{
+    static const char *const states[] = {"queued", "running", "done", "failed", "cancelled"};
+    ljgap_reply r = {0}, pr = {0};
+    cJSON *doc = NULL;
+    const cJSON *st, *prog, *ms, *res, *prob;
+    int known = 0;
+    r.status = 200;
+    r.content_type = "application/json";
+    if (!(r.body = ljgap_job_status_json(rec))) goto end; /* out of memory */
+    r.len = strlen(r.body);
+    if (!utf8_ok(r.body, r.len)) breach(ep, &r, "not valid UTF-8");
+    doc = cJSON_ParseWithLength(r.body, r.len);
+    if (!cJSON_IsObject(doc)) {
+        breach(ep, &r, "the status is not one JSON object");
+        goto end;
+    }
+    if (!all_finite(doc)) breach(ep, &r, "a number that is not finite");
+    st = cJSON_GetObjectItemCaseSensitive(doc, "status");
+    prog = cJSON_GetObjectItemCaseSensitive(doc, "progress");
+    ms = cJSON_GetObjectItemCaseSensitive(doc, "elapsed_ms");
+    res = cJSON_GetObjectItemCaseSensitive(doc, "result");
+    prob = cJSON_GetObjectItemCaseSensitive(doc, "problem");
+    for (size_t i = 0; cJSON_IsString(st) && i < sizeof states / sizeof states[0]; i++)
+        known |= strcmp(st->valuestring, states[i]) == 0;
+    if (!known || !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "id")) ||
+        !cJSON_IsNumber(prog) || !(prog->valuedouble >= 0 && prog->valuedouble <= 1) ||
+        !cJSON_IsNumber(ms) || !(ms->valuedouble >= 0)) {
+        breach(ep, &r, "no id, a status outside the five, or progress or elapsed_ms wrong");
+        goto end;
+    }
+    if ((strcmp(st->valuestring, "done") == 0) != cJSON_IsObject(res) ||
+        (strcmp(st->valuestring, "failed") == 0 && !cJSON_IsObject(prob)))
+        breach(ep, &r, "a result not exactly when done, or a failure without a problem");
+    if (cJSON_IsObject(prob)) { /* checked as if it had been sent on its own */
+        const cJSON *ps = cJSON_GetObjectItemCaseSensitive(prob, "status");
+        pr = r;
+        pr.status = cJSON_IsNumber(ps) ? (int)ps->valuedouble : 0;
+        pr.content_type = "application/problem+json";
+        check_problem(ep, &pr, prob, NULL, NULL);
+    }
+end:
+    cJSON_Delete(doc);
+    free(r.body);
+    ljgap_job_record_clear(rec);
+}
+
 /* "@jobrow": a stored record, shown as a status object. */
 static void fuzz_jobrow(const char *body, size_t len)
 {
-    static const char *const states[] = {"queued", "running", "done", "failed", "cancelled"};
     const char *p = body, *end = body + len;
     ljgap_job_record rec;
-    ljgap_reply r = {0}, pr = {0};
     double *num[] = {&rec.progress, &rec.created, &rec.started, &rec.finished, &rec.now};
     char line[64], state[32] = "";
-    cJSON *doc = NULL;
-    const cJSON *st, *prog, *ms, *res, *prob;
-    int known = 0, lines = 0;
+    int lines = 0;
     memset(&rec, 0, sizeof rec);
     lines += next_line(&p, end, rec.id, sizeof rec.id);
     lines += next_line(&p, end, state, sizeof state);
@@ -332,44 +384,40 @@ static void fuzz_jobrow(const char *body, size_t len)
         if (rec.answer_len) memcpy(rec.answer, p, rec.answer_len);
         rec.answer[rec.answer_len] = '\0';
     }
-    r.status = 200;
-    r.content_type = "application/json";
-    if (!(r.body = ljgap_job_status_json(&rec))) goto end; /* out of memory */
-    r.len = strlen(r.body);
-    if (!utf8_ok(r.body, r.len)) breach("@jobrow", &r, "not valid UTF-8");
-    doc = cJSON_ParseWithLength(r.body, r.len);
-    if (!cJSON_IsObject(doc)) {
-        breach("@jobrow", &r, "the status is not one JSON object");
-        goto end;
+    check_record("@jobrow", &rec);
+}
+
+/* "@pgrow": a row of the PostgreSQL job store in libpq's text format, one column a line
+ * (LJGAP_PG_* order; "\\N" is SQL NULL; the request column makes it a claim's row), read by
+ * ljgap_jobstore_pg_row and then shown as a status object. */
+static void fuzz_pgrow(char *body, size_t len)
+{
+    const char *val[LJGAP_PG_COLS] = {0};
+    int lens[LJGAP_PG_COLS] = {0}, ncols = 0;
+    ljgap_job_record rec;
+    char *p = body, *end = body + len;
+    while (p < end && ncols < LJGAP_PG_COLS) {
+        char *nl = memchr(p, '\n', (size_t)(end - p));
+        size_t n = (size_t)((nl ? nl : end) - p);
+        if (!(n == 2 && p[0] == '\\' && p[1] == 'N')) {
+            val[ncols] = p;
+            lens[ncols] = (int)n;
+        }
+        ncols++;
+        p = nl ? nl + 1 : end;
     }
-    if (!all_finite(doc)) breach("@jobrow", &r, "a number that is not finite");
-    st = cJSON_GetObjectItemCaseSensitive(doc, "status");
-    prog = cJSON_GetObjectItemCaseSensitive(doc, "progress");
-    ms = cJSON_GetObjectItemCaseSensitive(doc, "elapsed_ms");
-    res = cJSON_GetObjectItemCaseSensitive(doc, "result");
-    prob = cJSON_GetObjectItemCaseSensitive(doc, "problem");
-    for (size_t i = 0; cJSON_IsString(st) && i < sizeof states / sizeof states[0]; i++)
-        known |= strcmp(st->valuestring, states[i]) == 0;
-    if (!known || !cJSON_IsString(cJSON_GetObjectItemCaseSensitive(doc, "id")) ||
-        !cJSON_IsNumber(prog) || !(prog->valuedouble >= 0 && prog->valuedouble <= 1) ||
-        !cJSON_IsNumber(ms) || !(ms->valuedouble >= 0)) {
-        breach("@jobrow", &r, "no id, a status outside the five, or progress or elapsed_ms wrong");
-        goto end;
+    memset(&rec, 0, sizeof rec);
+    if (ljgap_jobstore_pg_row(&rec, val, lens,
+                              ncols == LJGAP_PG_COLS ? LJGAP_PG_COLS : LJGAP_PG_REQUEST) != 0)
+        return; /* out of memory: cleared */
+    if (strlen(rec.id) > LJGAP_JOB_ID_LEN || strlen(rec.kind) > LJGAP_JOB_KIND_MAX ||
+        (rec.request && rec.request[rec.request_len] != '\0') ||
+        (rec.answer && rec.answer[rec.answer_len] != '\0') ||
+        (ncols < LJGAP_PG_COLS && rec.request)) {
+        ljgap_reply none = {0};
+        breach("@pgrow", &none, "a record out of its bounds");
     }
-    if ((strcmp(st->valuestring, "done") == 0) != cJSON_IsObject(res) ||
-        (strcmp(st->valuestring, "failed") == 0 && !cJSON_IsObject(prob)))
-        breach("@jobrow", &r, "a result not exactly when done, or a failure without a problem");
-    if (cJSON_IsObject(prob)) { /* checked as if it had been sent on its own */
-        const cJSON *ps = cJSON_GetObjectItemCaseSensitive(prob, "status");
-        pr = r;
-        pr.status = cJSON_IsNumber(ps) ? (int)ps->valuedouble : 0;
-        pr.content_type = "application/problem+json";
-        check_problem("@jobrow", &pr, prob, NULL, NULL);
-    }
-end:
-    cJSON_Delete(doc);
-    free(r.body);
-    ljgap_job_record_clear(&rec);
+    check_record("@pgrow", &rec);
 }
 
 /* Is the cell empty, a finite number, inf, true or false? */
@@ -460,6 +508,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (strcmp(ep, "@jobrow") == 0) {
         fuzz_jobrow(body, len);
+        goto end;
+    }
+    if (strcmp(ep, "@pgrow") == 0) {
+        fuzz_pgrow(body, len);
         goto end;
     }
     known = ljgap_handler_has(ep);
