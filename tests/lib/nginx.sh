@@ -6,7 +6,8 @@
 #   nginx_conf PORT...   write $tmp/nginx/nginx.conf: the deploy file with its upstream servers
 #                        replaced by 127.0.0.1:PORT for each PORT, and listening on NGINX_PORT
 #                        (picked here once); sets NGINX_URL; fails if the file changed shape
-#   nginx_start          start it in the foreground process NGINX_PID (daemon off); waits for it
+#   nginx_start          start it in the foreground process NGINX_PID (daemon off; under
+#                        $NGINX_WRAP, such as nice, if set); waits for it
 #   nginx_stop           stop it (SIGQUIT: graceful; SIGKILL after 5 s) and wait
 # The upstream lines of the deploy file are "server 127.0.0.1:8081 ..." and "... :8082 ...".
 
@@ -57,7 +58,8 @@ nginx_check() { # nginx -t on the configuration
 }
 
 nginx_start() {
-    nginx -p "$NGINX_DIR" -e "$NGINX_DIR/error.log" -c "$NGINX_DIR/nginx.conf" 2>>"$NGINX_DIR/error.log" &
+    ${NGINX_WRAP:-} nginx -p "$NGINX_DIR" -e "$NGINX_DIR/error.log" -c "$NGINX_DIR/nginx.conf" \
+        2>>"$NGINX_DIR/error.log" &
     NGINX_PID=$!
     for _ in $(seq 1 100); do
         curl -s -o /dev/null --max-time 1 "$NGINX_URL/healthz" && return 0

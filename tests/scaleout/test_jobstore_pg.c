@@ -186,6 +186,33 @@ static void test_pg_schema(void **state)
     ljgap_jobstore_close(st);
 }
 
+static void *opener(void *p)
+{
+    char err[600];
+    ljgap_jobstore *st = NULL;
+    if (ljgap_jobstore_open_pg(getenv("LJGAP_TEST_PG_URL"), 1, &st, err, sizeof err) != 0)
+        return NULL;
+    return st;
+}
+
+/* Four daemons starting at once on an empty database: the schema is made once, all open. */
+static void test_pg_concurrent_open(void **state)
+{
+    fixture *f = *state;
+    pthread_t t[4];
+    void *st[4];
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(pthread_create(&t[i], NULL, opener, NULL), 0);
+    for (int i = 0; i < 4; i++)
+        pthread_join(t[i], &st[i]);
+    for (int i = 0; i < 4; i++) {
+        assert_non_null(st[i]);
+        ljgap_jobstore_close(st[i]);
+    }
+    assert_int_equal(raw_long(f->url, "SELECT count(*) FROM ljgapd.schema_version"), 1);
+    assert_int_equal(raw_long(f->url, "SELECT max(version) FROM ljgapd.schema_version"), 1);
+}
+
 /* Two stores on one database are two daemons sharing one queue. */
 static void test_pg_two_daemons(void **state)
 {
@@ -358,26 +385,23 @@ static void test_pg_reconnect(void **state)
 {
     fixture *f = *state;
     ljgap_jobstore *st = open_pg(f->url, 2);
-    static const char kill_all[] = "SELECT count(pg_terminate_backend(pid)) FROM pg_stat_activity "
-                                   "WHERE application_name = 'ljgapd' AND pid <> "
-                                   "pg_backend_pid()";
+    /* (waiting up to 5 s for each to be gone: then its socket is closed) */
+    static const char kill_all[] = "SELECT count(pg_terminate_backend(pid, 5000)) FROM "
+                                   "pg_stat_activity WHERE application_name = 'ljgapd' AND pid "
+                                   "<> pg_backend_pid()";
     unsigned q, r;
     long run;
     int cancel;
     create_ok(st, ID_A, "{}");
     create_ok(st, ID_B, "{}");
     assert_true(raw_long(f->url, kill_all) >= 1);
-    sleep_ms(50);
     assert_int_equal(state_of(st, ID_A), LJGAP_JOB_QUEUED);
     run = claim_ok(st, ID_A, 30);
     raw_ok(f->url, kill_all);
-    sleep_ms(50);
     assert_int_equal(ljgap_jobstore_renew(st, ID_A, run, 0.5, 30, &cancel), LJGAP_JOBSTORE_OK);
     raw_ok(f->url, kill_all);
-    sleep_ms(50);
     assert_int_equal(ljgap_jobstore_finish(st, ID_A, run, LJGAP_JOB_DONE, "{}", 2), 0);
     raw_ok(f->url, kill_all);
-    sleep_ms(50);
     create_ok(st, ID_C, "{}");
     assert_int_equal(ljgap_jobstore_counts(st, &q, &r), 0);
     assert_true(q == 2 && r == 0);
@@ -538,17 +562,10 @@ int main(void)
 {
 #define T(f) cmocka_unit_test_setup_teardown(f, setup, teardown)
     const struct CMUnitTest tests[] = {
-        CONTRACT_TESTS(T),
-        T(test_pg_schema),
-        T(test_pg_two_daemons),
-        T(test_pg_reopen),
-        T(test_pg_concurrent_claims),
-        T(test_pg_concurrent_cap),
-        T(test_pg_reconnect),
-        T(test_pg_open_errors),
-        T(test_pg_foreign_schema),
-        T(test_pg_schema_too_new),
-        cmocka_unit_test(test_pg_row),
+        CONTRACT_TESTS(T),         T(test_pg_schema),         T(test_pg_concurrent_open),
+        T(test_pg_two_daemons),    T(test_pg_reopen),         T(test_pg_concurrent_claims),
+        T(test_pg_concurrent_cap), T(test_pg_reconnect),      T(test_pg_open_errors),
+        T(test_pg_foreign_schema), T(test_pg_schema_too_new), cmocka_unit_test(test_pg_row),
     };
     if (!getenv("LJGAP_TEST_PG_URL")) {
         fprintf(stderr, "test_jobstore_pg: set LJGAP_TEST_PG_URL to a database of a private "
