@@ -1,11 +1,12 @@
 /* jobs.h -- background jobs for the HTTP daemon: worker threads running jobs from a job store.
  *
  * A job is a request body of some kind (the daemon has one, "simulation") kept in a job store
- * (jobstore.h: SQLite today). Submitting writes it there; worker threads claim jobs from the
- * store, run the kind's function on the stored body and write progress and the answer back;
- * clients poll by id. Since a job is its stored body, a daemon that restarts (or crashes)
- * runs the jobs that were queued or running again from the start, under the same ids, and
- * keeps serving the finished ones until they expire. The runner knows nothing of physics or
+ * (jobstore.h: SQLite, or PostgreSQL shared by several daemons). Submitting writes it there;
+ * worker threads claim jobs from the store, run the kind's function on the stored body and
+ * write progress and the answer back; clients poll by id. Since a job is its stored body, a
+ * daemon that restarts (or crashes) runs the jobs that were queued or running again from the
+ * start, under the same ids, and keeps serving the finished ones until they expire; with a
+ * shared store another daemon does, once the lost job's lease lapses. The runner knows nothing of physics or
  * HTTP: kinds are functions given at start.
  *
  *   ljgap_jobs *js = ljgap_jobs_alloc(&cfg, store, kinds, nkinds);   workers start here

@@ -12,8 +12,8 @@
  * every other body route keeps JSON and --max-body.
  *
  * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and stores
- * the request as a job in the job store (jobstore.h: SQLite in --state-dir, so jobs survive a
- * restart); 202, with the job's id and its Location, only once the job is committed. Worker
+ * the request as a job in the job store (jobstore.h: SQLite in --state-dir, or PostgreSQL
+ * with --jobs-db, shared by several daemons; either way jobs survive a restart); 202, with the job's id and its Location, only once the job is committed. Worker
  * threads run the stored requests (jobs.h: --job-workers threads, a queue of --job-queue, 503
  * with Retry-After when full, or with the problem job-store when the store fails).
  * GET /v1/simulations/ID polls it (status, progress, then result or problem; a done job's
