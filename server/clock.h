@@ -2,7 +2,8 @@
  *
  * Every thread of the server that waits with a time limit waits on a condition variable timed
  * on CLOCK_MONOTONIC (so a change of the wall clock cannot stretch or cut a wait), and takes its
- * deadline from here. Used by the job runner (jobs.c) and the daemon (pool.c, conns.c).
+ * deadline from here. Used by the job runner (jobs.c), the PostgreSQL job store
+ * (jobstore_pg.c) and the daemon (pool.c, conns.c).
  */
 #ifndef LJGAP_CLOCK_H
 #define LJGAP_CLOCK_H

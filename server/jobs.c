@@ -145,7 +145,7 @@ static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state 
         failed = 1;
         pthread_mutex_lock(&js->lock);
         if (!js->stopping) {
-            struct timespec t = deadline_in(FINISH_RETRY_S);
+            struct timespec t = ljgap_deadline_in(FINISH_RETRY_S);
             pthread_cond_timedwait(&js->work, &js->lock, &t);
         }
         stopping = js->stopping;

@@ -39,6 +39,7 @@
  * postgresql://user@host:port/dbname and every form of the password is scrubbed from what
  * libpq says.
  */
+#include "clock.h"
 #include "jobstore.h"
 
 #include <libpq-fe.h>
@@ -489,10 +490,7 @@ static int take(pg_store *s, double deadline, PGconn **out)
                                           s->max, OP_S);
                 return LJGAP_JOBSTORE_ERROR;
             }
-            clock_gettime(CLOCK_MONOTONIC, &t);
-            t.tv_sec += (time_t)left;
-            t.tv_nsec += (long)((left - floor(left)) * 1e9);
-            if (t.tv_nsec >= 1000000000L) t.tv_sec++, t.tv_nsec -= 1000000000L;
+            t = ljgap_deadline_in(left);
             pthread_cond_timedwait(&s->freed, &s->lock, &t);
         }
     }
@@ -972,13 +970,7 @@ int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore *
     }
     s->base.ops = &pg_ops;
     pthread_mutex_init(&s->lock, NULL);
-    {
-        pthread_condattr_t ca;
-        pthread_condattr_init(&ca);
-        pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-        pthread_cond_init(&s->freed, &ca);
-        pthread_condattr_destroy(&ca);
-    }
+    ljgap_cond_init_monotonic(&s->freed);
     s->max = max_conns ? max_conns : CONNS_DEFAULT;
     find_secrets(s, url);
     s->safe = strdup("postgresql://");
