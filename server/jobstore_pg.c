@@ -41,6 +41,7 @@
  */
 #include "clock.h"
 #include "jobstore.h"
+#include "ljgap.h" /* ljgap_now: monotonic seconds */
 
 #include <libpq-fe.h>
 
@@ -173,13 +174,6 @@ typedef struct {
 
 typedef enum { X_OK, X_BROKEN, X_TIMEOUT } exec_fail;
 
-static double mono(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 /* ---- messages: one line, no password ---- */
 
 /* Copies msg into out (cap bytes) on one line (runs of newlines, tabs and spaces become one
@@ -288,14 +282,14 @@ static void quiet(void *arg, const char *message)
     (void)arg, (void)message; /* notices (and a FATAL before a close) are no log lines of ours */
 }
 
-/* Waits until fd is ready for events or deadline (mono) passes: 1 ready, 0 timed out, -1 a
+/* Waits until fd is ready for events or deadline (ljgap_now) passes: 1 ready, 0 timed out, -1 a
  * bad descriptor. */
 static int wait_socket(int fd, short events, double deadline)
 {
     struct pollfd p = {fd, events, 0};
     if (fd < 0) return -1;
     for (;;) {
-        double left = deadline - mono();
+        double left = deadline - ljgap_now();
         int rc;
         if (left <= 0) return 0;
         rc = poll(&p, 1, (int)ceil(left * 1e3));
@@ -416,7 +410,7 @@ fail:
 static void mark_down(pg_store *s, const char *why)
 {
     s->down = 1;
-    s->retry_at = mono() + RETRY_S;
+    s->retry_at = ljgap_now() + RETRY_S;
     clean_msg(s, why, s->reason, sizeof s->reason);
     pthread_cond_broadcast(&s->freed);
 }
@@ -452,7 +446,7 @@ static int take(pg_store *s, double deadline, PGconn **out)
             pthread_mutex_lock(&s->lock);
             continue;
         }
-        if (s->down && (s->probing || mono() < s->retry_at)) {
+        if (s->down && (s->probing || ljgap_now() < s->retry_at)) {
             snprintf(why, sizeof why, "%s", s->reason);
             pthread_mutex_unlock(&s->lock);
             ljgap_jobstore_set_errmsg("%s: the database is unreachable (%s); trying again every "
@@ -483,7 +477,7 @@ static int take(pg_store *s, double deadline, PGconn **out)
         }
         { /* every connection is in use: wait for one, or for the store to go down */
             struct timespec t;
-            double left = deadline - mono();
+            double left = deadline - ljgap_now();
             if (left <= 0) {
                 pthread_mutex_unlock(&s->lock);
                 ljgap_jobstore_set_errmsg("%s: all %u connections stayed busy for %.0f s", s->safe,
@@ -525,7 +519,7 @@ static PGresult *run(pg_store *s, const char *what, const char *sql, int n, cons
                      const char *request, size_t request_len, ExecStatusType want, int retry,
                      int *st)
 {
-    double deadline = mono() + OP_S;
+    double deadline = ljgap_now() + OP_S;
     const char *v[8];
     int lens[8] = {0}, fmts[8] = {0};
     PGresult *res;
@@ -551,7 +545,7 @@ static PGresult *run(pg_store *s, const char *what, const char *sql, int n, cons
             else
                 snprintf(why, sizeof why, "%s", PQerrorMessage(c));
             give(s, c, fail);
-            if (fail == X_BROKEN && retry-- > 0 && mono() < deadline) continue;
+            if (fail == X_BROKEN && retry-- > 0 && ljgap_now() < deadline) continue;
             set_error(s, what, why);
             *st = LJGAP_JOBSTORE_ERROR;
             return NULL;
@@ -875,7 +869,7 @@ static PGresult *open_exec(pg_store *s, PGconn *c, const char *sql, ExecStatusTy
 /* The schema: ours, at its latest version (migrating under the lock), or an error in err. */
 static int check_schema(pg_store *s, PGconn *c, char *err, size_t errlen)
 {
-    double deadline = mono() + 4 * OP_S;
+    double deadline = ljgap_now() + 4 * OP_S;
     PGresult *res = NULL;
     long version = 0, tables = 0;
     int has_schema, has_version, ok = -1;
@@ -942,7 +936,7 @@ end:
     PQclear(res);
     if (ok != 0 && PQstatus(c) == CONNECTION_OK) { /* leave the connection clean (or drop it) */
         exec_fail fail;
-        PQclear(pg_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, mono() + OP_S, &fail));
+        PQclear(pg_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, ljgap_now() + OP_S, &fail));
     }
     return ok;
 }
@@ -1018,7 +1012,7 @@ int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore *
     s->keys[k] = "client_encoding", s->vals[k++] = "UTF8"; /* after the URL: always */
     s->keys[k] = NULL, s->vals[k] = NULL;
 
-    if (!(c = pg_connect(s, mono() + OP_S, why, sizeof why))) {
+    if (!(c = pg_connect(s, ljgap_now() + OP_S, why, sizeof why))) {
         char clean[MSG_MAX];
         clean_msg(s, why, clean, sizeof clean);
         snprintf(err, errlen, "cannot connect to the job database %s: %s", s->safe, clean);
