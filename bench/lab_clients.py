@@ -5,7 +5,7 @@
 
 From three loopback addresses, for SECONDS seconds (keep-alive connections, every request
 distinct so that none is a cache hit):
-  batch        127.0.0.2  a script firing slow requests (~0.5 s each) on 5 connections at once
+  batch        127.0.0.2  a script firing slow requests (tol 1e-9: ~0.1 s each on a quiet machine) on 5 connections at once
   interactive  127.0.0.3  one person: a fast request (~10 ms), then 0.2 s of thinking, again
   mixed        127.0.0.4  2 connections alternating slow and fast requests
 Prints, per client, the requests, the answers by status and the latency p50/p99/max in ms.
