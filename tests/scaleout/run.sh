@@ -7,7 +7,8 @@
 #     one queue, concurrency, reconnection, opening errors: test_jobstore_pg);
 #   - two ljgapd --jobs-db URL --trust-proxy --job-lease 2 and nginx in front of them
 #     (tests/lib/nginx.sh): synchronous requests, X-Forwarded-For reaching ljgapd as the client,
-#     the body limits (1 MiB, 64 MiB for /v1/psd);
+#     the body limits (1 MiB, 64 MiB for /v1/psd); the deploy file's retries (idempotent only),
+#     timeouts and body limit checked against ljgapd's defaults from its --help;
 #   - jobs submitted through nginx: every id answers through either instance; one instance
 #     SIGKILLed in the middle of a job, and every job still ends done (the killed one claimed by
 #     the other once its lease lapsed, run from the start: the CLI's numbers), with no request
@@ -104,6 +105,34 @@ if ! nginx_conf "$A_PORT" "$B_PORT"; then
     exit 1
 fi
 check "nginx -t accepts deploy/nginx/ljgap.conf" eval 'out=$(nginx_check) || { echo "# $out"; false; }'
+# The deploy file's figures against ljgapd's own defaults (from its --help), so neither drifts
+# alone: retries only for idempotent requests (no non_idempotent, no retry of ljgapd's own 5xx),
+# the read timeout past --queue-wait + --max-seconds, the body limit --max-body, idle upstream
+# connections closed before --idle-timeout, the client's address appended to X-Forwarded-For.
+conf_matches_ljgapd() {
+    local help conf qw ms mb it rt body ka nu
+    help=$("$BIN" --help 2>&1)
+    conf=deploy/nginx/ljgap.conf
+    ljgapd_default() { printf '%s\n' "$help" | sed -n "s/^ *--$1 [A-Z]* .*(default \([0-9]*\)).*/\1/p"; }
+    conf_value() { sed -n "s/^ *$1 \([0-9]*\)[a-z]*;.*/\1/p" "$conf" | head -n 1; }
+    qw=$(ljgapd_default queue-wait) ms=$(ljgapd_default max-seconds)
+    mb=$(ljgapd_default max-body) it=$(ljgapd_default idle-timeout)
+    rt=$(conf_value proxy_read_timeout) body=$(conf_value client_max_body_size)
+    ka=$(conf_value keepalive_timeout)
+    nu=$(grep -E '^ *proxy_next_upstream ' "$conf")
+    if [ -n "$qw" ] && [ -n "$ms" ] && [ -n "$mb" ] && [ -n "$it" ] && [ -n "$rt" ] &&
+        [ -n "$body" ] && [ -n "$ka" ] && [ -n "$nu" ] &&
+        [ "$rt" -gt $((qw + ms)) ] && [ $((body * 1024 * 1024)) = "$mb" ] && [ "$ka" -lt "$it" ] &&
+        ! grep -q non_idempotent "$conf" && ! printf '%s' "$nu" | grep -q http_ &&
+        grep -qE '^ *proxy_set_header X-Forwarded-For \$proxy_add_x_forwarded_for;' "$conf"; then
+        return 0
+    fi
+    echo "# --queue-wait $qw --max-seconds $ms --max-body $mb --idle-timeout $it;" \
+        "proxy_read_timeout $rt, client_max_body_size ${body}m, keepalive_timeout $ka;$nu"
+    return 1
+}
+check "deploy/nginx/ljgap.conf matches ljgapd's defaults (idempotent retries, timeouts, body)" \
+    conf_matches_ljgapd
 if ! nginx_start; then
     echo "not ok - scaleout: nginx did not start"
     exit 1

@@ -128,6 +128,9 @@ static void theory_alone(void **state)
         assert_close(r.fine.g_eq.value, sum.g_eq.value, r.fine.g_eq.err + sum.g_eq.err);
         assert_close(r.fine.dgamma_eff.value, sum.dgamma_eff.value,
                      r.fine.dgamma_eff.err + sum.dgamma_eff.err);
+        assert_close(r.fine.sigma_max.value, sum.sigma_max.value,
+                     r.fine.sigma_max.err + sum.sigma_max.err);
+        assert_close(r.m0_fine, r.fine.m0, 1e-12 * p.m0);
         assert_true(r.law_err > 0.0);
         ljgap_sim_result_free(&r);
     }
