@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The project on its own (issue 14): no tracked file names a path outside the repository; a
+# The project on its own (issue 14): no tracked file names a path outside the repository; each
+# make goal installs only what it needs (make run no test, benchmark or fuzzing tool); a
 # clone of the repository alone, with nothing beside it, builds and serves its page; the daemon
 # serves the compiled-in page with no flags (every file the page loads, the icon, ETag and 304)
 # or a directory with --web DIR; every problem type openapi.json lists is a page of the running
@@ -23,6 +24,56 @@ if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
 else
     echo "not ok - not a git checkout: cannot list the tracked files"
 fi
+
+# ---- dependencies by goal: make run installs only what building and serving need ----
+# What each goal would install (the Makefile's GOAL_DEBS.G and GOAL_CMDS.G, package names after
+# the colon), printed by make itself without installing anything.
+goal_pkgs() { # goal_pkgs G: the Debian packages goal G installs when they are missing
+    env -u MAKEFLAGS -u MAKELEVEL make -s --no-print-directory -C "$ROOT" \
+        --eval 'print-deps-%: ; @echo $(GOAL_DEBS.$*) $(foreach c,$(GOAL_CMDS.$*),$(word 2,$(subst :, ,$(c))))' \
+        "print-deps-$1" | tr ' ' '\n' | sed '/^$/d' | sort -u
+}
+has_all() { # has_all LIST WORD...: every WORD is a line of LIST
+    local w
+    for w in "${@:2}"; do grep -qx -- "$w" <<<"$1" || return 1; done
+}
+has_none() { # has_none LIST WORD...: no WORD is a line of LIST
+    local w
+    for w in "${@:2}"; do grep -qx -- "$w" <<<"$1" && return 1; done
+    return 0
+}
+run_deps=$(goal_pkgs run)
+check "make run installs the build and serve libraries and npm only ($(echo $run_deps))" \
+    eval 'has_all "$run_deps" libmicrohttpd-dev libcjson-dev libgsl-dev libfftw3-dev \
+        libsqlite3-dev libpq-dev npm && has_none "$run_deps" chromium clang libclang-rt-14-dev \
+        valgrind wrk gnuplot-nox libcmocka-dev postgresql postgresql-client nginx groff-base \
+        python3-requests python3-pandas curl jq'
+test_deps=$(goal_pkgs test)
+check "make test adds the test tools (cmocka, chromium, valgrind, postgresql, nginx, groff, ...)" \
+    eval 'has_all "$test_deps" $run_deps libcmocka-dev chromium valgrind postgresql nginx \
+        groff-base python3-requests python3-pandas curl jq && has_none "$test_deps" clang wrk gnuplot-nox'
+bench_deps=$(goal_pkgs bench)
+check "make bench adds the benchmark tools (gnuplot, wrk, valgrind, jq, nginx), not the test ones" \
+    eval 'has_all "$bench_deps" $run_deps gnuplot-nox wrk valgrind jq curl python3 nginx &&
+        has_none "$bench_deps" chromium clang libcmocka-dev postgresql'
+fuzz_deps=$(goal_pkgs fuzz)
+check "make fuzz adds clang and its fuzzer runtime only" \
+    eval 'has_all "$fuzz_deps" $run_deps clang libclang-rt-14-dev &&
+        [ "$(comm -13 <(echo "$run_deps") <(echo "$fuzz_deps") | tr "\n" " ")" = "clang libclang-rt-14-dev " ]'
+all_deps=$(goal_pkgs all)
+check "make deps installs everything the other goals do" \
+    eval '[ -z "$(comm -13 <(echo "$all_deps") <(printf "%s\n" $test_deps $bench_deps $fuzz_deps | sort -u))" ]'
+# every command the benchmarks call is one make bench installs (or the base system has)
+missing=""
+for c in gnuplot valgrind wrk jq curl python3 nginx; do
+    if grep -lqw -- "$c" bench/*.sh bench/run.sh 2>/dev/null &&
+        ! env -u MAKEFLAGS -u MAKELEVEL make -s --no-print-directory -C "$ROOT" \
+            --eval 'print-cmds: ; @echo $(GOAL_CMDS.bench)' print-cmds | tr ' ' '\n' |
+            grep -q "^$c:"; then
+        missing="$missing $c"
+    fi
+done
+check "every tool bench/*.sh calls is one make bench installs${missing:+ (not:$missing)}" [ -z "$missing" ]
 
 # ---- the page compiled in: started from an empty directory, no flags ----
 mkdir -p "$tmp/empty"
