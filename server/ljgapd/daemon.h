@@ -205,6 +205,9 @@ enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status
 /* 503 with Retry-After: seconds. */
 enum MHD_Result respond_busy(struct MHD_Connection *c, request *r, const char *detail,
                              unsigned seconds);
+/* 503 of type unavailable (the computation was cancelled: its client went away), with
+ * Retry-After: 1. */
+enum MHD_Result respond_cancelled(struct MHD_Connection *c, request *r, const char *detail);
 /* 200 with the file open on fd (size bytes); fd is closed with the response. */
 enum MHD_Result respond_file(struct MHD_Connection *c, request *r, int fd, size_t size,
                              const char *ctype);

@@ -3,10 +3,10 @@
  * Every answer goes through respond(), which adds the common headers (Content-Type,
  * X-Request-Id, nosniff, the page's Content-Security-Policy, Connection: close while stopping)
  * and queues it. Routes answer through respond_json, respond_reply, respond_problem,
- * respond_busy and respond_file; none builds a response by hand. Problems written here are the
- * HTTP-level ones (404, 405, 413, 415, 503, 500); the handler writes its own (400, 404, 406,
- * 422) with the same base URI, /problems/ (problems.h: each type is a page the daemon serves),
- * and openapi.json lists them all.
+ * respond_busy, respond_cancelled and respond_file; none builds a response by hand. Problems
+ * written here are the HTTP-level ones (404, 405, 413, 415, 503, 500); the handler writes its own
+ * (400, 404, 406, 422) with the same base URI, /problems/ (problems.h: each type is a page the
+ * daemon serves), and openapi.json lists them all.
  */
 #include "daemon.h"
 #include "problems.h"
@@ -96,10 +96,11 @@ static const char *problem_slug(int status)
     }
 }
 
-enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status,
-                                const char *detail, const char *header, const char *value)
+/* A problem of type slug (a row of problems.c) with status. */
+static enum MHD_Result problem_answer(struct MHD_Connection *c, request *r, int status,
+                                      const char *slug, const char *detail, const char *header,
+                                      const char *value)
 {
-    const char *slug = problem_slug(status);
     const ljgap_problem_doc *doc = ljgap_problem_find(slug);
     cJSON *p = cJSON_CreateObject();
     char type[64], *text = NULL;
@@ -117,6 +118,18 @@ enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status
     cJSON_free(text);
     if (resp && header) MHD_add_response_header(resp, header, value);
     return respond(c, r, status, resp, "application/problem+json");
+}
+
+enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status,
+                                const char *detail, const char *header, const char *value)
+{
+    return problem_answer(c, r, status, problem_slug(status), detail, header, value);
+}
+
+enum MHD_Result respond_cancelled(struct MHD_Connection *c, request *r, const char *detail)
+{
+    return problem_answer(c, r, MHD_HTTP_SERVICE_UNAVAILABLE, "unavailable", detail,
+                          MHD_HTTP_HEADER_RETRY_AFTER, "1");
 }
 
 enum MHD_Result respond_busy(struct MHD_Connection *c, request *r, const char *detail,

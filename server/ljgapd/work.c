@@ -13,7 +13,8 @@
  *   3. wake: MHD_resume_connection(). libmicrohttpd calls the route's access handler again on
  *      its I/O thread, which finds the task ended and answers from it: the work's reply, 503
  *      after waiting --queue-wait seconds, 503 while shutting down, or, when the client went
- *      away, a 503 that nobody is likely to read (the log line says so).
+ *      away, a 503 "unavailable" (cancelled) that nobody is likely to read (the log line says
+ *      so).
  *
  * Responses are only ever queued from the I/O thread, inside the access handler; the pool's
  * threads only call MHD_resume_connection, which libmicrohttpd allows from any thread.
@@ -102,10 +103,9 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     case POOL_GONE:
         /* Nobody is likely to read this (the socket hung up), but a client that only shut down
          * its sending side still learns what happened; a write to a closed socket just fails. */
-        ret = respond_busy(c, r,
-                           "the connection was closed (or shut down for sending) while the "
-                           "request waited or ran, so it was cancelled",
-                           1);
+        ret = respond_cancelled(c, r,
+                                "the connection was closed (or shut down for sending) while "
+                                "the request waited or ran, so it was cancelled");
         break;
     }
     work_release(r);

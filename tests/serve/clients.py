@@ -13,10 +13,12 @@
       One connection sending "GET /healthz HTTP/1.1..." one byte every INTERVAL seconds;
       prints the seconds until the server closed it, or "open" after LIMIT seconds.
   clients.py half PORT BODY
-      Sends a POST /v1/adhesion with BODY, shuts down its sending side at once, and prints the
-      status line it reads back (or "none"), within 30 s.
+      Sends a POST /v1/adhesion with BODY, shuts down its sending side at once, reads the
+      answer until the server closes (within 30 s) and prints its status code and the problem
+      type of its body ("503 /problems/unavailable"), or "none".
 Every socket is closed on exit; every loop is bounded by its arguments.
 """
+import re
 import select
 import socket
 import sys
@@ -121,12 +123,20 @@ def half(port, body):
     s.sendall(b"POST /v1/adhesion HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
               b"Content-Length: %d\r\n\r\n" % len(data) + data)
     s.shutdown(socket.SHUT_WR)
+    answer = b""
     try:
-        line = s.makefile("rb").readline().decode(errors="replace").strip()
+        while len(answer) < 1 << 20:
+            d = s.recv(65536)
+            if not d:
+                break
+            answer += d
     except OSError:
-        line = ""
-    print(line or "none", flush=True)
+        pass
     s.close()
+    m = re.match(rb"HTTP/1\.[01] (\d{3})", answer)
+    t = re.search(rb'"type":"([^"]*)"', answer)
+    print("%s %s" % (m.group(1).decode(), t.group(1).decode() if t else "-") if m else "none",
+          flush=True)
 
 
 def main(argv):

@@ -129,6 +129,11 @@ wait_files $((10 * SLOW)) "$tmp/hold"
 cancelled() { [ "$(grep -c 'went away after [0-9.]*s, computation cancelled' "$tmp/one.err")" = 2 ]; }
 check "the slot holder was cancelled when its client gave up" \
     eval 'for _ in $(seq 1 $((100 * SLOW))); do cancelled && break; sleep 0.05; done; cancelled'
+# A client that shuts down its sending side counts as gone: the computation is cancelled, and
+# the answer it may still read says so (problem type unavailable, not busy).
+half=$($CLIENTS half "${URL##*:}" "$LONG")
+check "a client that shuts down its sending side is cancelled: 503 unavailable ($half)" \
+    [ "$half" = "503 /problems/unavailable" ]
 
 # ---- fairness: 127.0.0.2 sends five slow requests, 127.0.0.3 one just after ----
 # (not under valgrind: thirty times slower, the six take minutes; the paths they take are the
