@@ -160,7 +160,7 @@ check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 if start limits --compute-slots 1 --queue 1 --queue-wait $((2 * SLOW)); then
     bg_post "$tmp/l1" "$LONG" --max-time $((8 * SLOW))
     wait_health 5 '.compute.running == 1'
-    bg_post "$tmp/l2" "$(fast 0.31)"
+    bg_post "$tmp/l2" "$(fast 0.31)" -D "$tmp/l2.hdrs"
     wait_health 5 '.compute.waiting == 1'
     t0=$(date +%s.%N)
     post "$(fast 0.32)"
@@ -170,8 +170,8 @@ if start limits --compute-slots 1 --queue 1 --queue-wait $((2 * SLOW)); then
             [[ "$(hdr Retry-After)" =~ ^[0-9]+$ ]] && json ".type | endswith(\"/busy\")" &&
             json ".detail | test(\"queue is full\")"'
     wait_files 10 "$tmp/l2"
-    check "the waiting one gets 503 after --queue-wait ($(cat "$tmp/l2" | cut -d' ' -f1))" \
-        grep -q '^503 ' "$tmp/l2"
+    check "the waiting one gets 503 + Retry-After after --queue-wait ($(cat "$tmp/l2" | cut -d' ' -f1))" \
+        eval 'grep -q "^503 " "$tmp/l2" && grep -qi "^Retry-After: [0-9][0-9]*" "$tmp/l2.hdrs"'
     check "the log says how long it waited" wait_grep 2 ' 503 .* waited=[0-9.]*s' "$tmp/limits.err"
     wait_files $((12 * SLOW)) "$tmp/l1"
     stop
@@ -222,6 +222,7 @@ if start perclient; then
     kill "$holder" 2>/dev/null
     wait "$holder" 2>/dev/null
     stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
     echo "not ok - ljgapd did not start with its defaults"
 fi
@@ -235,6 +236,7 @@ if start slowsend --receive-timeout 2; then
     req GET /healthz
     check "a whole request in time is served (200)" [ "$STATUS" = 200 ]
     stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
     echo "not ok - ljgapd --receive-timeout 2 did not start"
 fi
@@ -254,6 +256,7 @@ if start proxy --trust-proxy --client-connections 2 --compute-slots 1; then
         [ "$STATUS" = 200 ]
     wait_files $((10 * SLOW)) "$tmp/p1" "$tmp/p2"
     stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
     echo "not ok - ljgapd --trust-proxy did not start"
 fi
@@ -268,8 +271,26 @@ if start noproxy --client-connections 2; then
     kill "$holder" 2>/dev/null
     wait "$holder" 2>/dev/null
     stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
 else
     echo "not ok - ljgapd --client-connections 2 did not start"
+fi
+
+# ================= the open-file limit =================
+# The soft limit is raised to the hard one at start (the log says so), and the connection
+# limit fits inside it. (Not under valgrind, which keeps descriptors of its own.)
+if [ -z "$WRAP" ]; then
+    fdlimit() { # fdlimit NAME SOFT:HARD CONNECTIONS LOG-TEXT: start under prlimit, check, stop
+        local name=$1 lim=$2 conns=$3 text=$4
+        WRAP="prlimit --nofile=$lim" start "$name"
+        req GET /healthz
+        check "open-file limit $lim: '$text' in the log, connections.limit $conns" \
+            eval 'grep -qF "$text" "$tmp/$name.err" && json ".connections.limit == $conns"'
+        stop
+        check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
+    }
+    fdlimit files-raised 256:4096 1024 "open-file limit 4096 (raised from 256)"
+    fdlimit files-fitted 256:256 192 "192 connections (32 per client), open-file limit 256,"
 fi
 
 check "bad --queue-wait is refused with status 2" \
