@@ -189,7 +189,6 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             break;
         case 'c':
             bad = parse_uint(optarg, 4, 1000000, &c->connections);
-            c->connections_given = 1;
             break;
         case 'C':
             bad = parse_uint(optarg, 1, 1000000, &c->client_connections);

@@ -36,7 +36,6 @@ typedef struct {
     const char *bind;            /* numeric IPv4 or IPv6 address to listen on (127.0.0.1) */
     const char *web;             /* directory of static files, NULL serves none */
     unsigned connections;        /* most open connections (default 1024, within RLIMIT_NOFILE) */
-    int connections_given;       /* --connections was given (else fitted to the file limit) */
     unsigned client_connections; /* most connections of one client (default 32) */
     unsigned io_threads;         /* libmicrohttpd I/O threads, epoll each (default 1) */
     unsigned slots;              /* concurrent computations (default: online cores) */
