@@ -4,8 +4,9 @@
 # 1 / single-request time) and on 2 connections per core (the compute slots full, the wait
 # queue in use), THROUGHPUT_ROUNDS (5) alternating rounds of THROUGHPUT_SECONDS (4) each.
 # Prints the medians, the efficiency rate / (cores / single-request time) and the answers that
-# were not 200 (none are expected: the wait queue takes the excess). wrk runs on the same cores
-# as the daemon, so the efficiency includes the load generator's share.
+# were not 200 or never came (wrk's socket errors; none are expected: the wait queue takes the
+# excess). wrk runs on the same cores as the daemon, so the efficiency includes the load
+# generator's share.
 # Writes bench/results/throughput.txt.
 #   BUILD=build bench/throughput.sh
 set -u
@@ -31,9 +32,10 @@ function request()
         '{"psd":{"kind":"power","D":2.5,"k1":1,"C":%.15g}}', 0.0795774715459477 * (1 + n * 1e-12)))
 end
 function done(summary, latency, requests)
-    io.write(string.format("rps %.1f p50_ms %.2f p99_ms %.2f not_200 %d\n",
+    local e = summary.errors
+    io.write(string.format("rps %.1f p50_ms %.2f p99_ms %.2f not_200 %d socket_errors %d\n",
         summary.requests / (summary.duration / 1e6), latency:percentile(50) / 1e3,
-        latency:percentile(99) / 1e3, summary.errors.status))
+        latency:percentile(99) / 1e3, e.status, e.connect + e.read + e.write + e.timeout))
 end
 LUA
 start tp || { echo "throughput.sh: ljgapd did not start" >&2; exit 1; }
@@ -48,7 +50,8 @@ wait "$PID"
 med() { sort -n | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }'; }
 one=$(awk '$1 == "one" { print $3 }' "$tmp/res" | med)
 full=$(awk '$1 == "full" { print $3 }' "$tmp/res" | med)
-bad=$(awk '{ s += $9 } END { print s + 0 }' "$tmp/res")
+# answers that were not 200, and requests that got no answer at all (refused, reset, timed out)
+bad=$(awk '{ s += $9 + $11 } END { print s + 0 }' "$tmp/res")
 {
     echo "# ljgapd throughput, $(date -u +%Y-%m-%d), $CORES cores, loopback, distinct Fig. 4" \
         "adhesion requests, $ROUNDS rounds of ${SECS} s, default daemon settings"
@@ -57,6 +60,6 @@ bad=$(awk '{ s += $9 } END { print s + 0 }' "$tmp/res")
         printf "median_single_request_ms %.3f\n", 1e3 / o
         printf "median_answers_per_s_at_%d_connections %.1f\n", 2 * c, f
         printf "efficiency %.2f (answers/s over cores / single-request time)\n", f / (c * o)
-        printf "answers_not_200 %d\n", b
+        printf "answers_not_200 %d (with the requests that got no answer)\n", b
         printf "ratio_to_before_issue_19 %.2f (273 answers/s, efficiency 0.88, thread per connection)\n", f / 273 }'
 } | tee "$out"

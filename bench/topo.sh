@@ -7,7 +7,7 @@
 #     Gaussian amplitudes, N = 128 ... 1024 (bench/topo.c accuracy).
 # Writes bench/results/topo.txt and bench/results/topo_accuracy.csv. Run under nice on a shared
 # machine: `BUILD=build nice -n 19 bench/topo.sh` (make bench runs it).
-set -eu
+set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 tmp=$(mktemp -d)
@@ -31,14 +31,23 @@ out=bench/results/topo.txt
     done
     sort -n "$tmp"/time.* | sed -n 2p | awk '{ printf "cli_wall_s %.2f (median of 3)\ncli_peak_rss %.0f MiB\n", $1, $2 / 1024 }'
     # the daemon: three POSTs of the file as text/plain, its peak resident memory afterwards
-    "$BUILD/ljgapd" --port 0 --compute-slots 1 >"$tmp/d.out" 2>"$tmp/d.err" &
+    # its own state directory: the default one (~/.local/state/ljgapd) belongs to whatever
+    # ljgapd the user runs, and a second daemon on it refuses to start
+    "$BUILD/ljgapd" --port 0 --compute-slots 1 --state-dir "$tmp/state" >"$tmp/d.out" \
+        2>"$tmp/d.err" &
     pid=$!
+    # this block is a subshell (its output goes through tee): stop the daemon on its every exit
+    trap 'if [ -n "$pid" ]; then kill "$pid" 2>/dev/null; fi' EXIT
     url=
     for _ in $(seq 1 100); do
         url=$(sed -n 's|^listening on \(http://127\.0\.0\.1:[0-9]*\)/$|\1|p' "$tmp/d.out")
         [ -n "$url" ] && break
         sleep 0.05
     done
+    if [ -z "$url" ]; then
+        echo "topo.sh: ljgapd did not start: $(head -c 300 "$tmp/d.err")" >&2
+        exit 1
+    fi
     rss0=$(awk '/VmHWM/ { print $2 }' "/proc/$pid/status")
     for i in 1 2 3; do
         curl -s -o "$tmp/d.json" -w '%{time_total}\n' --max-time 60 "$url/v1/psd?dx=1e-8" \

@@ -11,8 +11,8 @@
  * The matrix: one row of the map a line (heights in metres along x, spacing dx; successive
  * lines are dy apart), values separated by white space or by one comma (with any white space
  * around it), '#' starts a comment that runs to the end of the line, blank and comment-only
- * lines are skipped, CR LF line ends and a leading UTF-8 byte-order mark are accepted. A value
- * is a decimal number (digits, sign, point, exponent: no hex, inf or nan). Every problem is
+ * lines are skipped, CR LF and CR line ends and a leading UTF-8 byte-order mark are accepted. A
+ * value is a decimal number (digits, sign, point, exponent: no hex, inf or nan). Every problem is
  * recorded with its pointer (/topography/heights/ROW/COL, ROW counting the data rows from 0) and
  * a detail that names the line and column (1-based, in bytes) where the value starts, so that
  * the user can find it in an editor; the parse stops after LJGAP_MAX_ERRORS of them.
@@ -148,6 +148,10 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
         size_t cols = 0;
         int last = 0; /* 0: line start, 1: after a value, 2: after a comma */
         if (!le) le = end;
+        /* a CR not followed by LF ends the line too (classic Mac OS line ends): without this
+         * such a file would be one long line, a map read as a single profile */
+        const char *cr = memchr(p, '\r', (size_t)(le - p));
+        if (cr && cr + 1 < le) le = cr;
         line++;
         while (p < le) {
             if (is_space(*p)) {

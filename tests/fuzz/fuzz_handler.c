@@ -527,8 +527,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             text->p[text->np].name = t;
             text->p[text->np++].value = eq ? (*eq = '\0', eq + 1) : NULL;
         }
-        for (size_t i = 0; i < len; i++)
-            text->lines += body[i] == '\n';
+        for (size_t i = 0; i < len; i++) /* LF, and CR before anything but LF, end a line */
+            text->lines +=
+                body[i] == '\n' || (body[i] == '\r' && i + 1 < len && body[i + 1] != '\n');
         text->lines++;
         known = ljgap_handler_has_text(ep + 5);
         {

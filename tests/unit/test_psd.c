@@ -105,16 +105,19 @@ static char *map_json(const map *m, int periodic, const char *extra)
 }
 
 /* The matrix as text: style 0 spaces and LF, 1 commas with CR LF, comments, blank lines and a
- * byte-order mark. */
+ * byte-order mark, 2 commas with CR alone (classic Mac OS line ends, as spreadsheets' "CSV
+ * (Macintosh)" writes them), a comment and a blank line. */
 static char *map_text(const map *m, int style)
 {
+    static const char *const eol[] = {"\n", "\r\n", "\r"};
     buf b = {0};
-    if (style) add(&b, "\xEF\xBB\xBF# a header comment\r\n\r\n");
+    if (style == 1) add(&b, "\xEF\xBB\xBF# a header comment\r\n\r\n");
+    if (style == 2) add(&b, "# a header comment\r\r");
     for (size_t j = 0; j < m->ny; j++) {
         for (size_t i = 0; i < m->nx; i++)
             add(&b, "%s%.17g", i ? (style ? " , " : " ") : (style ? "  " : ""),
                 m->h[j * m->nx + i]);
-        add(&b, style ? (j % 3 ? "\r\n" : "  # row comment\r\n") : "\n");
+        add(&b, "%s%s", style && j % 3 == 0 ? "  # row comment" : "", eol[style]);
     }
     return b.s;
 }
@@ -274,18 +277,23 @@ static void text_equals_json(void **state)
 {
     map m = make_map(48, 40, 1e-8, 2.6, 2e-9, 5);
     char *req = map_json(&m, 0, NULL), *t0 = map_text(&m, 0), *t1 = map_text(&m, 1);
+    char *t2 = map_text(&m, 2);
     answer a = ask("psd", req), b = ask_text("psd", "dx=1e-08", t0, strlen(t0));
     answer c = ask_text("psd", "periodic=false&dx=1.0e-8&dy=1e-8", t1, strlen(t1));
+    answer d = ask_text("psd", "dx=1e-8", t2, strlen(t2));
     assert_int_equal(a.status, 200);
     assert_int_equal(b.status, 200);
     assert_int_equal(c.status, 200);
+    assert_int_equal(d.status, 200);
     char *sa = without_meta(a.body), *sb = without_meta(b.body), *sc = without_meta(c.body);
+    char *sd = without_meta(d.body);
     assert_string_equal(sa, sb);
     assert_string_equal(sa, sc);
+    assert_string_equal(sa, sd); /* CR alone ends a line: not one long profile */
     near(num(get(a.body, "grid"), "nx"), 48, 0, "nx: a row is a line");
     near(num(get(a.body, "grid"), "ny"), 40, 0, "ny");
-    free(sa), free(sb), free(sc);
-    cJSON_Delete(a.body), cJSON_Delete(b.body), cJSON_Delete(c.body);
+    free(sa), free(sb), free(sc), free(sd);
+    cJSON_Delete(a.body), cJSON_Delete(b.body), cJSON_Delete(c.body), cJSON_Delete(d.body);
     /* with a material, the same again */
     free(req);
     req = map_json(&m, 0, ",\"material\":" MAT);
@@ -296,7 +304,7 @@ static void text_equals_json(void **state)
     assert_string_equal(sa, sb);
     free(sa), free(sb);
     cJSON_Delete(a.body), cJSON_Delete(b.body);
-    free(req), free(t0), free(t1), free(m.h);
+    free(req), free(t0), free(t1), free(t2), free(m.h);
 }
 
 /* The text parser's numbers are strtod's (cJSON's) to the bit, in every notation: each map
@@ -487,8 +495,7 @@ static void bad_json_inputs(void **state)
     answer p = ask("psd", plane);
     free(plane);
     assert_int_equal(p.status, 422);
-    assert_string_equal(get(p.body, "type")->valuestring,
-                        "/problems/outside-model");
+    assert_string_equal(get(p.body, "type")->valuestring, "/problems/outside-model");
     assert_string_equal(get(cJSON_GetArrayItem(get(p.body, "errors"), 0), "pointer")->valuestring,
                         "/topography/heights");
     cJSON_Delete(p.body);
