@@ -11,7 +11,8 @@
  * The SI forms of whole results (ljgap_si_*: a summary, traction points, a PDF) are built here
  * from those conversions, so an answer's SI numbers come from one place: gaps x ε, tractions
  * x σ0, energies x Δγ (Δγeff is in units of Δγ), variances x ε², wavenumbers / χ, densities
- * of the gap / ε; an error converts with its value.
+ * of the gap / ε; an error converts with its value (a density's L1 error ∫|δΦ|dg is a pure
+ * number and stays as it is).
  *
  * Pure arithmetic: no allocation, no JSON, no state.
  */
@@ -142,5 +143,6 @@ void ljgap_si_pdf_of(const ljgap_material *m, const ljgap_pdf *p, ljgap_si_pdf *
         out->g_m[k] = ljgap_units_len_to_si(m, p->g[k]);
         out->phi_per_m[k] = p->phi[k] / m->epsilon;
     }
+    out->phi_l1 = p->phi_err; /* (1/ε) x ε: the L1 norm over the gap has no unit */
     out->sigma_Pa = est_scaled(p->sigma, ljgap_units_sigma0(m));
 }

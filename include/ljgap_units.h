@@ -54,8 +54,10 @@ double ljgap_units_var_to_si(const ljgap_material *m, double vt);
 /* ---- answers in SI: one call per kind of result, into a struct ----
  * The handler serialises these as the "si" object of an answer (and the CSV form is written
  * from that JSON), so every SI number of every answer is converted here and nowhere else.
- * Errors convert with their values. A contact answer's SI form is its summary's (the pull-off
- * forces of ljgap_contact are in N already). */
+ * Errors convert with their values: every computed quantity is an ljgap_est (or, for a PDF's
+ * density, an L1 error), serialised as the si object's "error"; the scales and the inputs
+ * (χ, σ0, E*, the gaps asked for, m0) are exact and carry none. A contact answer's SI form is
+ * its summary's (the pull-off forces of ljgap_contact are in N already). */
 
 /* The scales a material sets. */
 typedef struct {
@@ -89,6 +91,8 @@ typedef struct {
     double k2_per_m;    /* its cut-off (1/m; INFINITY stays INFINITY) */
     double *g_m;        /* the gaps (m) */
     double *phi_per_m;  /* the density at each (1/m) */
+    double phi_l1;      /* the estimated L1 error ∫|δΦ|dg of the density: a pure number, the
+                           same for phi_per_m over g_m as for Φ over g̃ (ljgap_pdf.phi_err) */
     ljgap_est sigma_Pa; /* its mean traction (Pa) */
 } ljgap_si_pdf;
 /* Fills out from p; out->g_m and out->phi_per_m must hold p->n values. */

@@ -7,7 +7,8 @@
  * ljgap_contact_compute follow their formulas, with λ = 1.16μ for the smooth law. The SI forms
  * of whole results (ljgap_si_*) give the numbers the server answered before they existed (the
  * handler then converted field by field): the Fig. 4 spectrum's adhesion, traction and PDF with
- * E* = 1 GPa, Δγ = 0.05 J/m², ε = 0.3 nm; errors scale with their values.
+ * E* = 1 GPa, Δγ = 0.05 J/m², ε = 0.3 nm; errors scale with their values, and the PDF's L1
+ * error of the density, a pure number, is unchanged.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -120,8 +121,8 @@ static void si_forms(void **state)
     double pg[3] = {0.6, 1.1, 1.6},
            pphi[3] = {-2.5076949299505563e-160, 0.578894102600608, 0.0695624929126073};
     double g_m[3], phi_m[3];
-    ljgap_pdf pdf = {5, 3, pg, pphi, 1, 0.98, {-2.275523875019925, 5.026745078154477e-08}, 0};
-    ljgap_si_pdf sp = {0, g_m, phi_m, {0, 0}};
+    ljgap_pdf pdf = {5, 3, pg, pphi, 1, 0.98, {-2.275523875019925, 5.026745078154477e-08}, 3e-9};
+    ljgap_si_pdf sp = {.g_m = g_m, .phi_per_m = phi_m};
 
     assert_int_equal(ljgap_material_set(&m, 1e9, 0.05, 3e-10), LJGAP_OK);
     ljgap_si_scales_of(&m, &sc);
@@ -137,6 +138,7 @@ static void si_forms(void **state)
     near_rel(ss.m0_m2, 4.5e-20, rel, "m0_m2");
     near_rel(ss.g_eq_m.err, sum.g_eq.err * 3e-10, rel, "g_eq_m err");
     near_rel(ss.sigma_max_Pa.err, sum.sigma_max.err * sc.sigma0_Pa, rel, "sigma_max_Pa err");
+    near_rel(ss.g_at_max_m.err, sum.g_at_max.err * 3e-10, rel, "g_at_max_m err");
     near_rel(ss.dgamma_eff_J_m2.err, sum.dgamma_eff.err * 0.05, rel, "dgamma_eff err");
 
     ljgap_si_points_of(&m, g, sigma, 2, pt);
@@ -154,6 +156,8 @@ static void si_forms(void **state)
     near_rel(phi_m[1], 1929647008.6686938, rel, "phi_per_m[1]");
     near_rel(phi_m[2], 231874976.37535763, rel, "phi_per_m[2]");
     near_rel(sp.sigma_Pa.value, -389266465.7156072, rel, "pdf sigma_Pa");
+    near_rel(sp.sigma_Pa.err, pdf.sigma.err * sc.sigma0_Pa, rel, "pdf sigma_Pa err");
+    near_rel(sp.phi_l1, pdf.phi_err, 0, "pdf phi_l1: the L1 norm has no unit");
     pdf.k2 = INFINITY; /* the whole PSD: the cut-off stays infinite (null in JSON) */
     ljgap_si_pdf_of(&m, &pdf, &sp);
     assert_true(isinf(sp.k2_per_m) && sp.k2_per_m > 0);
