@@ -14,7 +14,9 @@
  *     cached}, and the core's warnings are copied into meta.warnings.
  *
  * With a "material" block every answer adds "si": the scales χ (m) and σ0 (Pa) and the
- * returned quantities in SI (gaps in m, tractions in Pa, Δγeff in J/m², core/units.c).
+ * returned quantities in SI (gaps in m, tractions in Pa, Δγeff in J/m², core/units.c), with
+ * their errors in an "error" object placed as the dimensionless answer places its own: si.error
+ * beside si's values, a sweep's in each of si.results.
  * "contact" (theory.md §6, core/contact.c) adds the sphere's pull-off forces. A sweep computes
  * its values on up to limits.sweep_threads threads; each value is independent, so the answer
  * is the sequential one.
@@ -215,21 +217,30 @@ static cJSON *put_nums(job *j, cJSON *parent, const char *key, const double *x, 
     return a;
 }
 
-/* The estimated fields of ljgap_summary, in contract order. */
+/* The estimated fields of ljgap_summary and of its SI form ljgap_si_summary, in contract
+ * order: their names and where each is. */
 static const struct {
-    const char *name;
-    size_t off;
+    const char *name, *si_name;
+    size_t off, si_off;
 } est_fields[] = {
-    {"g_eq", offsetof(ljgap_summary, g_eq)},
-    {"sigma_max", offsetof(ljgap_summary, sigma_max)},
-    {"g_at_max", offsetof(ljgap_summary, g_at_max)},
-    {"dgamma_eff", offsetof(ljgap_summary, dgamma_eff)},
+    {"g_eq", "g_eq_m", offsetof(ljgap_summary, g_eq), offsetof(ljgap_si_summary, g_eq_m)},
+    {"sigma_max", "sigma_max_Pa", offsetof(ljgap_summary, sigma_max),
+     offsetof(ljgap_si_summary, sigma_max_Pa)},
+    {"g_at_max", "g_at_max_m", offsetof(ljgap_summary, g_at_max),
+     offsetof(ljgap_si_summary, g_at_max_m)},
+    {"dgamma_eff", "dgamma_eff_J_m2", offsetof(ljgap_summary, dgamma_eff),
+     offsetof(ljgap_si_summary, dgamma_eff_J_m2)},
 };
 #define N_EST (sizeof est_fields / sizeof est_fields[0])
 
 static const ljgap_est *est_of(const ljgap_summary *s, size_t i)
 {
     return (const ljgap_est *)((const char *)s + est_fields[i].off);
+}
+
+static const ljgap_est *si_est_of(const ljgap_si_summary *s, size_t i)
+{
+    return (const ljgap_est *)((const char *)s + est_fields[i].si_off);
 }
 
 /* The adhesion fields of s into obj and their errors into a new object obj.error_key (all
@@ -256,20 +267,29 @@ static void put_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_k
     put(j, err_parent, err_key, err);
 }
 
-/* The adhesion fields of s in SI (ljgap_si_summary_of: m, Pa, J/m², m²) into obj. */
-static void put_si_summary(job *j, cJSON *obj, const ljgap_summary *s)
+/* The adhesion fields of s in SI (ljgap_si_summary_of: m, Pa, J/m², m²) into obj and their
+ * errors into a new object err_parent.err_key, as put_summary does. */
+static void put_si_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+                           const ljgap_summary *s)
 {
     ljgap_si_summary si;
+    cJSON *err = cJSON_CreateObject();
+    char label[40];
     ljgap_si_summary_of(&j->rq.mat, s, &si);
-    put_num(j, obj, "g_eq_m", si.g_eq_m.value, "si.g_eq_m", -1);
-    put_num(j, obj, "sigma_max_Pa", si.sigma_max_Pa.value, "si.sigma_max_Pa", -1);
-    put_num(j, obj, "g_at_max_m", si.g_at_max_m.value, "si.g_at_max_m", -1);
-    put_num(j, obj, "dgamma_eff_J_m2", si.dgamma_eff_J_m2.value, "si.dgamma_eff_J_m2", -1);
+    for (size_t i = 0; i < N_EST; i++) {
+        const char *name = est_fields[i].si_name;
+        const ljgap_est *e = si_est_of(&si, i);
+        snprintf(label, sizeof label, "si.%s", name);
+        put_num(j, obj, name, e->value, label, -1);
+        snprintf(label, sizeof label, "si.error.%s", name);
+        put_num(j, err, name, e->err, label, -1);
+    }
     put_num(j, obj, "m0_m2", si.m0_m2, "si.m0_m2", -1);
+    put(j, err_parent, err_key, err);
 }
 
 /* The "si" object of an answer (NULL without a material): the scales (ljgap_si_scales_of),
- * and the adhesion fields of s in SI when s is not NULL. */
+ * and the adhesion fields of s in SI with their errors in si.error when s is not NULL. */
 static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
 {
     ljgap_si_scales sc;
@@ -280,7 +300,7 @@ static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
     put_num(j, si, "chi_m", sc.chi_m, "si.chi_m", -1);
     put_num(j, si, "sigma0_Pa", sc.sigma0_Pa, "si.sigma0_Pa", -1);
     put_num(j, si, "E_star_Pa", sc.E_star_Pa, "si.E_star_Pa", -1);
-    if (s) put_si_summary(j, si, s);
+    if (s) put_si_summary(j, si, si, "error", s);
     return si;
 }
 
@@ -373,7 +393,10 @@ static int run_traction(job *j)
         ljgap_si_points_of(&rq->mat, rq->x, sigma, rq->nx, pt);
         put_nums(j, si, "g_ave_m", &pt[0].g_ave_m, rq->nx, sizeof *pt, "si.g_ave_m");
         put_nums(j, si, "sigma_Pa", &pt[0].sigma_Pa.value, rq->nx, sizeof *pt, "si.sigma_Pa");
-        put_si_summary(j, put(j, si, "summary", cJSON_CreateObject()), &sum);
+        sum_obj = put(j, si, "summary", cJSON_CreateObject());
+        err = put(j, si, "error", cJSON_CreateObject());
+        put_nums(j, err, "sigma_Pa", &pt[0].sigma_Pa.err, rq->nx, sizeof *pt, "si.error.sigma_Pa");
+        put_si_summary(j, sum_obj, err, "summary", &sum);
         free(pt);
     }
 end:
@@ -387,7 +410,7 @@ static int run_pdf(job *j)
     ljgap_pdf *p = calloc(rq->nx, sizeof *p);
     ljgap_psd psd;
     ljgap_opts o;
-    cJSON *pdfs, *errs, *si, *sip = NULL;
+    cJSON *pdfs, *errs, *si, *sip = NULL, *sie = NULL;
     int st = p ? prepare(j, &rq->psd, &psd, &o, &j->rq.warn) : LJGAP_ENOMEM;
     if (st) goto end;
     st = ljgap_pdf_compute(&psd, &o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL, p,
@@ -396,9 +419,13 @@ static int run_pdf(job *j)
     if (st) goto end;
     pdfs = put(j, j->ans, "pdfs", cJSON_CreateArray());
     errs = put(j, put(j, j->ans, "error", cJSON_CreateObject()), "pdfs", cJSON_CreateArray());
-    if ((si = put_si(j, j->ans, NULL))) sip = put(j, si, "pdfs", cJSON_CreateArray());
-    for (size_t i = 0; sip && i < rq->nx; i++) {
+    if ((si = put_si(j, j->ans, NULL))) {
+        sip = put(j, si, "pdfs", cJSON_CreateArray());
+        sie = put(j, put(j, si, "error", cJSON_CreateObject()), "pdfs", cJSON_CreateArray());
+    }
+    for (size_t i = 0; sip && sie && i < rq->nx; i++) {
         cJSON *s = put(j, sip, NULL, cJSON_CreateObject());
+        cJSON *e = put(j, sie, NULL, cJSON_CreateObject());
         ljgap_si_pdf sp = {0};
         sp.g_m = malloc((p[i].n ? p[i].n : 1) * 2 * sizeof *sp.g_m);
         if (!sp.g_m) {
@@ -415,6 +442,8 @@ static int run_pdf(job *j)
         put_nums(j, s, "phi_per_m", sp.phi_per_m, p[i].n, sizeof *sp.phi_per_m,
                  "si.pdfs.phi_per_m");
         put_num(j, s, "sigma_Pa", sp.sigma_Pa.value, "si.pdfs.sigma_Pa", (long)i);
+        put_num(j, e, "phi_l1", sp.phi_l1, "si.error.pdfs.phi_l1", (long)i);
+        put_num(j, e, "sigma_Pa", sp.sigma_Pa.err, "si.error.pdfs.sigma_Pa", (long)i);
         free(sp.g_m);
     }
     for (size_t i = 0; pdfs && errs && i < rq->nx; i++) {
@@ -527,9 +556,10 @@ static int run_sweep(job *j)
         cJSON *r = put(j, results, NULL, cJSON_CreateObject());
         if (sw.st[i]) failed++;
         put_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
-        if (sir && !sw.st[i])
-            put_si_summary(j, put(j, sir, NULL, cJSON_CreateObject()), &sw.sum[i]);
-        else if (sir)
+        if (sir && !sw.st[i]) {
+            cJSON *sr = put(j, sir, NULL, cJSON_CreateObject());
+            put_si_summary(j, sr, sr, "error", &sw.sum[i]);
+        } else if (sir)
             put(j, sir, NULL, cJSON_CreateNull());
     }
     if (failed == rq->nx) {

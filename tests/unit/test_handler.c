@@ -676,6 +676,100 @@ static void si_arrays(void **state)
     cJSON_Delete(p.body);
 }
 
+/* The SI errors of every kind of answer are the dimensionless errors times their scale: gaps
+ * x ε, tractions x σ0, energies x Δγ; a PDF's L1 error has no unit. The scales are taken from
+ * the answer's own si (ε = 3√3 χσ0/E*, Δγ = 9√3 εσ0/16, from χ = 3ε²E* /(16Δγ) and
+ * σ0 = 16Δγ/(9√3ε)) and checked against the material asked for, so a conversion against the
+ * wrong scale, or an error left out, fails. */
+typedef struct {
+    double eps, s0, dg; /* ε (m), σ0 (Pa), Δγ (J/m²) */
+} si_scales;
+
+static si_scales scales_of(const cJSON *si)
+{
+    si_scales k;
+    k.s0 = num(si, "sigma0_Pa");
+    k.eps = 3 * sqrt(3) * num(si, "chi_m") * k.s0 / num(si, "E_star_Pa");
+    k.dg = 9 * sqrt(3) * k.eps * k.s0 / 16;
+    near(k.eps, 3e-10, 1e-14 * 3e-10, "epsilon from the si scales");
+    near(k.dg, 0.05, 1e-14 * 0.05, "dgamma from the si scales");
+    return k;
+}
+
+/* One SI error against the dimensionless one times scale (relative 1e-14: a few roundings). */
+static void si_err_is(const cJSON *si_err, const char *si_name, const cJSON *err, const char *name,
+                      double scale)
+{
+    double want = num(err, name) * scale;
+    char what[80];
+    snprintf(what, sizeof what, "si error %s = error %s x scale", si_name, name);
+    near(num(si_err, si_name), want, 1e-14 * fabs(want), what);
+}
+
+/* The four adhesion errors of an SI error object. */
+static void si_summary_errs(const cJSON *si_err, const cJSON *err, si_scales k)
+{
+    static const char *const si_names[] = {"g_eq_m", "sigma_max_Pa", "g_at_max_m",
+                                           "dgamma_eff_J_m2"};
+    const double f[] = {k.eps, k.s0, k.eps, k.dg};
+    assert_int_equal(cJSON_GetArraySize(si_err), 4);
+    for (int i = 0; i < 4; i++)
+        si_err_is(si_err, si_names[i], err, summary_fields[i], f[i]);
+}
+
+static void si_errors(void **state)
+{
+    answer a = ask("adhesion", "{'psd':" PSD "," MAT ",'tol':1e-4}");
+    answer c = ask("contact", "{'psd':" PSD_INF "," MAT ",'R':1e-6,'tol':1e-4}");
+    answer t = ask("traction", "{'psd':" PSD "," MAT ",'g_ave':[1.5,2,3],'tol':1e-4}");
+    answer p = ask("pdf", "{'psd':" PSD_INF "," MAT ",'g_ave':1.5,'k2':[5,null],'tol':1e-3}");
+    answer w = ask("sweep", "{'psd':" PSD "," MAT ",'tol':1e-3,'vary':'D','values':[2.3,2.6]}");
+    const cJSON *si, *se;
+    si_scales k;
+    check_meta(&a, "pde");
+    check_meta(&c, "pde");
+    check_meta(&t, "pde");
+    check_meta(&p, "pde");
+    check_meta(&w, "pde");
+    for (int n = 0; n < 2; n++) { /* adhesion and contact: si.error beside si's values */
+        const cJSON *b = n ? c.body : a.body;
+        si = get(b, "si");
+        si_summary_errs(get(si, "error"), get(b, "error"), scales_of(si));
+    }
+    si = get(t.body, "si"); /* traction: si.error = {sigma_Pa: [...], summary: {...}} */
+    k = scales_of(si);
+    se = get(si, "error");
+    assert_int_equal(cJSON_GetArraySize(get(se, "sigma_Pa")), 3);
+    for (int i = 0; i < 3; i++) {
+        double want = cJSON_GetArrayItem(get(get(t.body, "error"), "sigma"), i)->valuedouble * k.s0;
+        near(cJSON_GetArrayItem(get(se, "sigma_Pa"), i)->valuedouble, want, 1e-14 * want,
+             "traction si.error.sigma_Pa[i]");
+    }
+    si_summary_errs(get(se, "summary"), get(get(t.body, "error"), "summary"), k);
+    si = get(p.body, "si"); /* pdf: si.error.pdfs[i] = {phi_l1, sigma_Pa} */
+    k = scales_of(si);
+    se = get(get(si, "error"), "pdfs");
+    assert_int_equal(cJSON_GetArraySize(se), 2);
+    for (int i = 0; i < 2; i++) {
+        const cJSON *e = cJSON_GetArrayItem(get(get(p.body, "error"), "pdfs"), i);
+        const cJSON *s = cJSON_GetArrayItem(se, i);
+        assert_int_equal(cJSON_GetArraySize(s), 2);
+        si_err_is(s, "sigma_Pa", e, "sigma", k.s0);
+        si_err_is(s, "phi_l1", e, "phi_l1", 1);
+    }
+    si = get(w.body, "si"); /* sweep: each si.results[i] has its own error, as results[i] */
+    k = scales_of(si);
+    assert_int_equal(cJSON_GetArraySize(get(si, "results")), 2);
+    for (int i = 0; i < 2; i++)
+        si_summary_errs(get(cJSON_GetArrayItem(get(si, "results"), i), "error"),
+                        get(cJSON_GetArrayItem(get(w.body, "results"), i), "error"), k);
+    cJSON_Delete(a.body);
+    cJSON_Delete(c.body);
+    cJSON_Delete(t.body);
+    cJSON_Delete(p.body);
+    cJSON_Delete(w.body);
+}
+
 static void contact_answer(void **state)
 {
     answer a = ask("contact", "{'psd':" PSD_INF ",'material':{'E1':2e9,'nu1':0.5,'E2':2e9,"
@@ -833,6 +927,7 @@ int main(void)
         cmocka_unit_test(concurrent_answers_agree),
         cmocka_unit_test(si_matches_dimensionless),
         cmocka_unit_test(si_arrays),
+        cmocka_unit_test(si_errors),
         cmocka_unit_test(contact_answer),
         cmocka_unit_test(fig5_trends),
         cmocka_unit_test(sweep_threads_agree),
