@@ -3,8 +3,9 @@
  * Written from the JSON answer itself (the cJSON tree the handler built, or the stored result
  * of a simulation job), so the two forms cannot disagree: the arrays that run along the points
  * become columns, every other field becomes one comment line named by its JSON path, with the
- * matching member of "error" as its ± error. Nothing here computes; the one derived column,
- * sigma_Pa_err, is error.sigma times si.sigma0_Pa.
+ * matching member of "error" as its ± error (for the si object's fields, of si's own "error",
+ * placed as the handler places it). Nothing here computes: every number, the SI errors too, is
+ * read from the answer.
  */
 #include "csv.h"
 
@@ -145,7 +146,7 @@ typedef struct {
     double factor;      /* 0: as they are; else each number times this */
 } column;
 
-#define MAX_COLS 20
+#define MAX_COLS 24
 
 static void put_header(ljgap_textbuf *b, const column *c, int n)
 {
@@ -203,11 +204,9 @@ static void csv_traction(ljgap_textbuf *b, const cJSON *ans)
     add(c, &n, "sigma", NULL, get(ans, "sigma"), 0);
     add(c, &n, "sigma_err", "sigma0", get(err, "sigma"), 0);
     if (si) {
-        const cJSON *s0 = get(si, "sigma0_Pa");
         add(c, &n, "g_ave_m", NULL, get(si, "g_ave_m"), 0);
         add(c, &n, "sigma_Pa", NULL, get(si, "sigma_Pa"), 0);
-        if (cJSON_IsNumber(s0))
-            add(c, &n, "sigma_Pa_err", "Pa", get(err, "sigma"), s0->valuedouble);
+        add(c, &n, "sigma_Pa_err", "Pa", get(get(si, "error"), "sigma_Pa"), 0);
     }
     put_header(b, c, n);
     put_rows(b, NULL, c, n);
@@ -217,6 +216,7 @@ static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
 {
     const cJSON *pdfs = get(ans, "pdfs"), *si = get(ans, "si");
     const cJSON *epdfs = get(get(ans, "error"), "pdfs"), *sipdfs = get(si, "pdfs");
+    const cJSON *siepdfs = get(get(si, "error"), "pdfs");
     char p[64], pre[80];
     int np = cJSON_GetArraySize(pdfs);
     column c[MAX_COLS];
@@ -224,14 +224,17 @@ static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
     ljgap_textbuf_printf(b, "# ljgap pdf: the gap PDF phi(g) for each cut-off k2, one row per "
                             "point; pdf is the index in pdfs[]\n");
     comments(b, "", ans, get(ans, "error"));
-    for (int i = 0; i < np; i++) {
-        const cJSON *e = cJSON_GetArrayItem(epdfs, i);
+    for (int i = 0; i < np; i++) { /* phi_l1 has no value beside it: a line of its own */
+        const cJSON *e = cJSON_GetArrayItem(epdfs, i), *se = cJSON_GetArrayItem(siepdfs, i);
         snprintf(p, sizeof p, "pdfs[%d]", i);
         comments(b, p, cJSON_GetArrayItem(pdfs, i), e);
         snprintf(p, sizeof p, "error.pdfs[%d].phi_l1", i);
         comment(b, p, "phi_l1", get(e, "phi_l1"), NULL);
+        if (!sipdfs) continue;
         snprintf(p, sizeof p, "si.pdfs[%d]", i);
-        if (sipdfs) comments(b, p, cJSON_GetArrayItem(sipdfs, i), NULL);
+        comments(b, p, cJSON_GetArrayItem(sipdfs, i), se);
+        snprintf(p, sizeof p, "si.error.pdfs[%d].phi_l1", i);
+        comment(b, p, "phi_l1", get(se, "phi_l1"), NULL);
     }
     ljgap_textbuf_printf(b, "pdf,k2 [1/chi],g [eps],phi [1/eps]%s\n",
                          si ? ",g_m [m],phi_per_m [1/m]" : "");
@@ -265,11 +268,23 @@ static const char *vary_unit(const char *vary, int si_psd)
 
 static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
 {
-    static const char *const fields[] = {"g_eq", "sigma_max", "g_at_max", "dgamma_eff"};
-    static const char *const errs[] = {"g_eq_err", "sigma_max_err", "g_at_max_err",
-                                       "dgamma_eff_err"};
-    static const char *const si_fields[] = {"g_eq_m", "sigma_max_Pa", "g_at_max_m",
-                                            "dgamma_eff_J_m2", "m0_m2"};
+    /* the columns after values: each result's field, its error's column, from si.results? */
+    static const struct {
+        const char *name, *err;
+        int si;
+    } fields[] = {
+        {"g_eq", "g_eq_err", 0},
+        {"sigma_max", "sigma_max_err", 0},
+        {"g_at_max", "g_at_max_err", 0},
+        {"dgamma_eff", "dgamma_eff_err", 0},
+        {"m0", NULL, 0},
+        {"k0", NULL, 0},
+        {"g_eq_m", "g_eq_m_err", 1},
+        {"sigma_max_Pa", "sigma_max_Pa_err", 1},
+        {"g_at_max_m", "g_at_max_m_err", 1},
+        {"dgamma_eff_J_m2", "dgamma_eff_J_m2_err", 1},
+        {"m0_m2", NULL, 1},
+    };
     const cJSON *res = get(ans, "results"), *vary = get(ans, "vary"), *si = get(ans, "si");
     const cJSON *sires = get(si, "results");
     cJSON *cols = cJSON_CreateArray(); /* the results' fields, pulled out into arrays */
@@ -279,12 +294,15 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
                             "varied PSD field, one row per value\n");
     comments(b, "", ans, NULL);
     add(c, &n, "values", vary_unit(cJSON_GetStringValue(vary), si_psd), get(ans, "values"), 0);
-    /* one array per field: result i's member, or null when the value failed */
-    for (int f = 0; ok && f < 6 + (si ? 5 : 0); f++) {
-        const char *name = f < 4 ? fields[f] : f == 4 ? "m0" : f == 5 ? "k0" : si_fields[f - 6];
-        const cJSON *src = f < 6 ? res : sires;
-        cJSON *a = cJSON_CreateArray(), *ea = f < 4 ? cJSON_CreateArray() : NULL;
-        ok = a && (f >= 4 || ea) && cJSON_AddItemToArray(cols, a) &&
+    /* one array per field (and error): result i's member, or null when the value failed */
+    for (size_t f = 0; ok && f < sizeof fields / sizeof fields[0]; f++) {
+        const char *name = fields[f].name;
+        const cJSON *src = fields[f].si ? sires : res;
+        cJSON *a, *ea;
+        if (fields[f].si && !si) break;
+        a = cJSON_CreateArray();
+        ea = fields[f].err ? cJSON_CreateArray() : NULL;
+        ok = a && (!fields[f].err || ea) && cJSON_AddItemToArray(cols, a) &&
              (!ea || cJSON_AddItemToArray(cols, ea));
         if (!ok) {
             cJSON_Delete(a);
@@ -297,7 +315,7 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
                  (!ea || cJSON_AddItemToArray(ea, e ? cJSON_Duplicate(e, 0) : cJSON_CreateNull()));
         }
         add(c, &n, name, NULL, a, 0);
-        if (ea) add(c, &n, errs[f], unit_of(name), ea, 0);
+        if (ea) add(c, &n, fields[f].err, unit_of(name), ea, 0);
     }
     if (!ok) {
         b->oom = 1;

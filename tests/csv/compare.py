@@ -3,7 +3,9 @@
 
 Parsed with Python's csv module (comment lines skipped as pandas' comment="#" does): every column
 is matched with its JSON array, every "# PATH [UNIT] = VALUE ± ERROR" line with the JSON value at
-PATH (and error.PATH); numbers must agree to within what JSON printing loses (2.3e-16 relative).
+PATH and its error (error.PATH, or si.error.REST for si.REST: the outermost "error" that has it);
+numbers must agree to within what JSON printing loses (2.3e-16 relative). The SI error columns
+are also checked against the dimensionless errors times the answer's own scale.
 The time in meta.elapsed_ms may differ between two requests and is not compared. Prints what
 differs and exits 1, or exits 0. Standard library only.
 """
@@ -31,6 +33,17 @@ def at(doc, path):
     return doc
 
 
+def error_of(doc, path):
+    """The error of the field at path: error.PATH, else A.error.REST for each prefix A."""
+    parts = path.split(".")
+    for cut in range(len(parts)):
+        try:
+            return at(doc, ".".join(parts[:cut] + ["error"] + parts[cut:]))
+        except (KeyError, IndexError, TypeError):
+            continue
+    raise KeyError("no error for " + path)
+
+
 def main():
     endpoint, jpath, cpath = sys.argv[1:4]
     ans = json.load(open(jpath))
@@ -47,8 +60,8 @@ def main():
             continue
         if not same(value, at(ans, path)):
             bad.append(f"{path}: {value} against {at(ans, path)}")
-        if err is not None and not same(err, at(ans, "error." + path)):
-            bad.append(f"error.{path}: {err}")
+        if err is not None and not same(err, error_of(ans, path)):
+            bad.append(f"error of {path}: {err}")
     rows = list(csv.reader(line for line in text.splitlines() if not line.startswith("#")))
     head = [h.split(" [")[0] for h in rows[0]]
     body = rows[1:]
@@ -59,12 +72,15 @@ def main():
         want["sigma_err"] = ans["error"]["sigma"]
         if "si" in ans:
             want["g_ave_m"], want["sigma_Pa"] = ans["si"]["g_ave_m"], ans["si"]["sigma_Pa"]
+            if "error" in ans["si"]:
+                want["sigma_Pa_err"] = ans["si"]["error"]["sigma_Pa"]
     elif endpoint == "sweep":
         want["values"] = ans["values"]
         for h in head[1:]:
             name = h[:-4] if h.endswith("_err") else h
             src = ans["si"]["results"] if name.endswith(("_m", "_Pa", "_J_m2", "_m2")) else ans["results"]
-            want[h] = [r[name] if not h.endswith("_err") else r["error"][name] for r in src]
+            want[h] = [None if r is None else r["error"][name] if h.endswith("_err") else r[name]
+                       for r in src]
     elif endpoint == "pdf":
         for key in ("k2", "g", "phi"):
             want[key] = []
@@ -87,12 +103,25 @@ def main():
             if not same(a, b):
                 bad.append(f"{h}[{i}]: {a} against {b}")
                 break
-    if endpoint == "traction" and "si" in ans:
-        s0 = ans["si"]["sigma0_Pa"]
-        for a, e in zip(col["sigma_Pa_err"], ans["error"]["sigma"]):
-            if not math.isclose(float(a), e * s0, rel_tol=1e-14):
-                bad.append(f"sigma_Pa_err {a} against {e * s0}")
-    missing = [h for h in head if h not in want and h != "sigma_Pa_err"]
+    if "si" in ans:  # the SI errors: the dimensionless ones times the answer's own scales
+        si = ans["si"]
+        s0 = si["sigma0_Pa"]
+        eps = 3 * math.sqrt(3) * si["chi_m"] * s0 / si["E_star_Pa"]
+        dg = 9 * math.sqrt(3) * eps * s0 / 16
+        scale = {"g_eq_m": ("g_eq", eps), "sigma_max_Pa": ("sigma_max", s0),
+                 "g_at_max_m": ("g_at_max", eps), "dgamma_eff_J_m2": ("dgamma_eff", dg)}
+        pairs = []
+        if endpoint == "traction":
+            pairs = [("sigma_Pa_err", "sigma_err", s0)]
+        elif endpoint == "sweep":
+            pairs = [(n + "_err", d + "_err", f) for n, (d, f) in scale.items()]
+        for h, dh, f in pairs:
+            for i, (a, e) in enumerate(zip(col.get(h, []), col.get(dh, []))):
+                if (a == "") != (e == "") or (a and not math.isclose(float(a), float(e) * f,
+                                                                      rel_tol=1e-14)):
+                    bad.append(f"{h}[{i}] {a} is not {dh} x scale = {e} x {f}")
+                    break
+    missing = [h for h in head if h not in want]
     if missing:
         bad.append("columns not checked: " + ", ".join(missing))
     for b in bad[:10]:

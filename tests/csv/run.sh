@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CSV over HTTP: traction, pdf, sweep and a finished simulation answer text/csv when the Accept
 # header asks for it, and the CSV, read by Python's csv module (tests/csv/compare.py), carries
-# the JSON answer's numbers; q-values and wildcards; 406 problems for an Accept nothing
+# the JSON answer's numbers (the SI errors too, and those equal to the dimensionless errors times
+# the answer's scales); q-values and wildcards; 406 problems for an Accept nothing
 # satisfies; CSV answers do not mix with cached JSON ones. One "ok"/"not ok" line per check.
 #   BUILD=build tests/csv/run.sh
 set -u
@@ -49,6 +50,14 @@ check "traction CSV: units in the header, an error column beside the values, SI 
 check "traction CSV: the summary and meta as # lines" eval 'grep -q "^# summary.g_eq \[eps\] = .* ± " \
     "$tmp/traction.csv" && grep -q "^# meta.method = pde$" "$tmp/traction.csv"'
 check "pdf CSV: k2 = null is inf" grep -q '^1,inf,' "$tmp/pdf.csv"
+check "traction CSV: the SI summary with its errors (si.error.summary)" \
+    grep -q '^# si.summary.sigma_max_Pa \[Pa\] = .* ± ' "$tmp/traction.csv"
+check "pdf CSV: each PDF's sigma_Pa with its error, and its phi_l1 (si.error.pdfs)" eval 'grep -q \
+    "^# si.pdfs\[1\].sigma_Pa \[Pa\] = .* ± " "$tmp/pdf.csv" &&
+    grep -q "^# si.error.pdfs\[1\].phi_l1 = " "$tmp/pdf.csv"'
+check "sweep CSV: an error column beside each SI value (si.results[i].error)" grep -q \
+    ',g_eq_m \[m\],g_eq_m_err \[m\],sigma_max_Pa \[Pa\],sigma_max_Pa_err \[Pa\],g_at_max_m \[m\],g_at_max_m_err \[m\],dgamma_eff_J_m2 \[J/m^2\],dgamma_eff_J_m2_err \[J/m^2\],m0_m2 \[m^2\]$' \
+    "$tmp/sweep.csv"
 
 # ---- negotiation ----
 TR="{$PSD,\"g_ave\":[2,3]}"

@@ -3,12 +3,13 @@
  * The CSV form must carry the JSON answer's numbers and nothing else: each answer is asked
  * for as JSON, then turned into CSV (ljgap_csv_reply, so the two share every byte of input),
  * and the CSV is parsed back line by line: every comment "# PATH [UNIT] = VALUE ± ERR" names a
- * JSON path whose value (and error."PATH") it must equal, every column a JSON array, and every
- * number in the JSON must have been met (no field left out). Numbers are compared to within
- * the last bit cJSON prints (it writes 15 significant digits when they read back to within
- * one part in 2^52). The handler's own CSV path (Accept: text/csv) must give the same table
- * as the conversion. Then the Accept header: q-values, wildcards, ties, malformed ranges,
- * 406 for what nothing satisfies, and the simulation status answer.
+ * JSON path whose value (and error: error.PATH, or si.error.REST for si.REST) it must equal,
+ * every column a JSON array, and every number in the JSON must have been met (no field left
+ * out, the SI errors included). Numbers are compared to within the last bit cJSON prints (it
+ * writes 15 significant digits when they read back to within one part in 2^52). The handler's
+ * own CSV path (Accept: text/csv) must give the same table as the conversion. Then the Accept
+ * header: q-values, wildcards, ties, malformed ranges, 406 for what nothing satisfies, and the
+ * simulation status answer.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -162,11 +163,28 @@ static void same(const char *text, const cJSON *v, const char *what)
         fail_msg("%s: CSV %.17g, JSON %.17g", what, x, v->valuedouble);
 }
 
+/* The error of the field at path: in the outermost "error" object that has it, as the CSV
+ * writer looks (error.PATH, then A.error.REST for each prefix A of PATH: si.error.summary.g_eq_m
+ * for si.summary.g_eq_m). */
+static const cJSON *error_of(const cJSON *ans, const char *path)
+{
+    char p[240];
+    for (size_t cut = 0; cut == 0 || path[cut]; cut++) {
+        const cJSON *e;
+        if (cut && path[cut] != '.') continue;
+        snprintf(p, sizeof p, "%.*s%serror.%s", (int)cut, path, cut ? "." : "",
+                 path + cut + (cut ? 1 : 0));
+        if ((e = resolve(ans, p))) return e;
+    }
+    fail_msg("%s: no error for it in the JSON answer", path);
+    return NULL;
+}
+
 /* Checks every comment line "# PATH [UNIT] = VALUE ± ERR" against the answer. */
 static void check_comments(const csv_doc *d, const cJSON *ans)
 {
     for (int i = 1; i < d->header; i++) {
-        char path[200], errpath[220], *eq, *pm, *value;
+        char path[200], *eq, *pm, *value;
         const char *line = d->lines[i];
         size_t n;
         assert_true(strncmp(line, "# ", 2) == 0);
@@ -179,8 +197,7 @@ static void check_comments(const csv_doc *d, const cJSON *ans)
         value = strdup(eq + 3);
         if ((pm = strstr(value, " ± "))) {
             *pm = '\0';
-            snprintf(errpath, sizeof errpath, "error.%s", path);
-            same(pm + strlen(" ± "), resolve(ans, errpath), errpath);
+            same(pm + strlen(" ± "), error_of(ans, path), path);
         }
         same(value, resolve(ans, path), path);
         free(value);
@@ -275,7 +292,9 @@ static void test_traction(void **state)
         same(c[3], resolve(ans, p), p);
         snprintf(p, sizeof p, "si.sigma_Pa[%d]", i);
         same(c[4], resolve(ans, p), p);
-        /* the one derived column: the error in Pa */
+        snprintf(p, sizeof p, "si.error.sigma_Pa[%d]", i);
+        same(c[5], resolve(ans, p), p);
+        /* and it is the error in σ0 times σ0 */
         assert_true(fabs(strtod(c[5], NULL) -
                          cJSON_GetArrayItem(resolve(ans, "error.sigma"), i)->valuedouble *
                              s0->valuedouble) <= 1e-15 * strtod(c[5], NULL));
@@ -344,13 +363,14 @@ static void test_sweep(void **state)
         d.lines[d.header],
         "values [eps^2],g_eq [eps],g_eq_err [eps],sigma_max [sigma0],sigma_max_err [sigma0],"
         "g_at_max [eps],g_at_max_err [eps],dgamma_eff [dgamma],dgamma_eff_err [dgamma],"
-        "m0 [eps^2],k0 [1/chi],g_eq_m [m],sigma_max_Pa [Pa],g_at_max_m [m],"
-        "dgamma_eff_J_m2 [J/m^2],m0_m2 [m^2]");
+        "m0 [eps^2],k0 [1/chi],g_eq_m [m],g_eq_m_err [m],sigma_max_Pa [Pa],"
+        "sigma_max_Pa_err [Pa],g_at_max_m [m],g_at_max_m_err [m],dgamma_eff_J_m2 [J/m^2],"
+        "dgamma_eff_J_m2_err [J/m^2],m0_m2 [m^2]");
     check_comments(&d, ans);
     assert_int_equal(d.n - d.header - 1, 2);
     for (int i = 0; i < 2; i++) {
-        char *c[20], p[64];
-        assert_int_equal(cells(d.lines[d.header + 1 + i], c, 20), 16);
+        char *c[24], p[64];
+        assert_int_equal(cells(d.lines[d.header + 1 + i], c, 24), 20);
         snprintf(p, sizeof p, "values[%d]", i);
         same(c[0], resolve(ans, p), p);
         for (int f = 0; f < 4; f++) {
@@ -363,12 +383,16 @@ static void test_sweep(void **state)
         same(c[9], resolve(ans, p), p);
         snprintf(p, sizeof p, "results[%d].k0", i);
         same(c[10], resolve(ans, p), p);
-        for (int f = 0; f < 5; f++) {
+        for (int f = 0; f < 4; f++) {
             static const char *const si[] = {"g_eq_m", "sigma_max_Pa", "g_at_max_m",
-                                             "dgamma_eff_J_m2", "m0_m2"};
+                                             "dgamma_eff_J_m2"};
             snprintf(p, sizeof p, "si.results[%d].%s", i, si[f]);
-            same(c[11 + f], resolve(ans, p), p);
+            same(c[11 + 2 * f], resolve(ans, p), p);
+            snprintf(p, sizeof p, "si.results[%d].error.%s", i, si[f]);
+            same(c[12 + 2 * f], resolve(ans, p), p);
         }
+        snprintf(p, sizeof p, "si.results[%d].m0_m2", i);
+        same(c[19], resolve(ans, p), p);
     }
     all_seen(ans, "the answer");
     check_handler_csv("sweep", rq, csv);
@@ -378,7 +402,8 @@ static void test_sweep(void **state)
     free(csv);
 }
 
-/* A value without a finite answer is a row of empty cells but for its value. */
+/* A value without a finite answer (null in results and si.results) is a row of empty cells but
+ * for its value (and k0); the SI columns and their errors come from si.results[i]. */
 static void test_sweep_failed_value(void **state)
 {
     const char *json = "{\"vary\":\"D\",\"values\":[2.5,2.9],\"results\":[{\"g_eq\":2.6,"
@@ -387,11 +412,17 @@ static void test_sweep_failed_value(void **state)
                        "\"dgamma_eff\":1e-7}},{\"g_eq\":null,\"sigma_max\":null,\"g_at_max\":null,"
                        "\"dgamma_eff\":null,\"m0\":null,\"k0\":0.47,\"error\":{\"g_eq\":null,"
                        "\"sigma_max\":null,\"g_at_max\":null,\"dgamma_eff\":null}}],"
+                       "\"si\":{\"chi_m\":3e-10,\"sigma0_Pa\":1e8,\"E_star_Pa\":1e9,\"results\":["
+                       "{\"g_eq_m\":7e-10,\"sigma_max_Pa\":1e7,\"g_at_max_m\":9e-10,"
+                       "\"dgamma_eff_J_m2\":0.01,\"m0_m2\":4.5e-20,\"error\":{\"g_eq_m\":3e-17,"
+                       "\"sigma_max_Pa\":10,\"g_at_max_m\":3e-17,\"dgamma_eff_J_m2\":5e-9}},null]},"
                        "\"meta\":{\"method\":\"pde\",\"warnings\":[\"values[1]: no answer\"]}}";
     char *csv = to_csv("sweep", json);
     csv_doc d = csv_parse(csv);
     (void)state;
-    assert_string_equal(d.lines[d.n - 1], "2.9,,,,,,,,,,0.47");
+    assert_string_equal(d.lines[d.n - 2], "2.5,2.6,1e-07,0.1,1e-07,3,1e-07,0.2,1e-07,0.5,0.47,"
+                                          "7e-10,3e-17,10000000,10,9e-10,3e-17,0.01,5e-09,4.5e-20");
+    assert_string_equal(d.lines[d.n - 1], "2.9,,,,,,,,,,0.47,,,,,,,,,");
     assert_string_equal(d.lines[d.header - 1], "# meta.warnings[0] = values[1]: no answer");
     csv_free(&d);
     free(csv);
