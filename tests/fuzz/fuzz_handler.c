@@ -22,8 +22,10 @@
  *     strlen(body), and every number in it is finite; the content type is application/json for 200,
  * application/problem+json else;
  *   - 200: meta {method, elapsed_ms >= 0, version, warnings[] of strings, cached false},
- *     an "error" object (a sweep's in its first result), and no warning saying a result was not
- * finite (that would be NaN or Inf computed by the core and papered over with null);
+ *     an "error" object (a sweep's in its first result), an "error" object in every "si" that
+ *     holds more than the scales (a sweep's in each of si.results that is not null), and no
+ *     warning saying a result was not finite (that would be NaN or Inf computed by the core and
+ *     papered over with null; the SI errors' labels are si.error...);
  *   - problems: type /problems/..., title, status equal to the HTTP
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
  *     pointer that names a member of the request or a missing member of one that exists; for a
@@ -250,6 +252,26 @@ static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc
     }
 }
 
+/* Does the answer's si (if any) carry the errors of what it holds: si.error when it has more
+ * than the scales, an error in each si.results[i] that is not null? */
+static int si_errors_ok(const cJSON *doc)
+{
+    const cJSON *si = cJSON_GetObjectItemCaseSensitive(doc, "si");
+    const cJSON *res = cJSON_GetObjectItemCaseSensitive(si, "results");
+    int computed = 0;
+    for (const cJSON *c = si ? si->child : NULL; c; c = c->next)
+        computed |= strcmp(c->string, "chi_m") && strcmp(c->string, "sigma0_Pa") &&
+                    strcmp(c->string, "E_star_Pa") && strcmp(c->string, "results") &&
+                    strcmp(c->string, "error");
+    if (res) {
+        if (!cJSON_IsArray(res)) return 0;
+        for (const cJSON *x = res->child; x; x = x->next)
+            if (!cJSON_IsNull(x) && !cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(x, "error")))
+                return 0;
+    }
+    return !computed || cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(si, "error"));
+}
+
 static void check_ok(const char *ep, const ljgap_reply *r, const cJSON *doc)
 {
     const cJSON *meta = cJSON_GetObjectItemCaseSensitive(doc, "meta"), *w, *ms;
@@ -270,6 +292,7 @@ static void check_ok(const char *ep, const ljgap_reply *r, const cJSON *doc)
                "cached} or without error");
         return;
     }
+    if (!si_errors_ok(doc)) breach(ep, r, "an si object without the errors of its values");
     for (const cJSON *s = w->child; s; s = s->next) {
         if (!cJSON_IsString(s))
             breach(ep, r, "a warning that is not a string");
