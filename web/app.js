@@ -328,10 +328,13 @@
     return tr;
   }
 
-  function summaryTable(s, e, si) {
+  /* The adhesion fields s with their errors e; with a material, in SI too (si, its errors sie). */
+  function summaryTable(s, e, si, sie) {
     e = e || {};
     si = si || {};
-    const siv = (k, unit) => (si[k] !== undefined ? `${fmt(si[k], 4)} ${unit}` : undefined);
+    sie = sie || {};
+    const pm = (k) => (typeof sie[k] === "number" ? ` ± ${errFmt(sie[k])}` : "");
+    const siv = (k, unit) => (si[k] !== undefined ? `${fmt(si[k], 4)}${pm(k)} ${unit}` : undefined);
     return el(
       "table",
       {},
@@ -389,7 +392,7 @@
     });
     const ro = $("readout-traction");
     ro.replaceChildren(
-      summaryTable(s, ans.error.summary, ans.si && ans.si.summary),
+      summaryTable(s, ans.error.summary, ans.si && ans.si.summary, ans.si && ans.si.error.summary),
       el(
         "div",
         { class: "meta" },

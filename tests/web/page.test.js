@@ -268,7 +268,7 @@ test("material and sphere radius: SI values and the contact panel", async () => 
   const contact = await page.textContent("#readout-contact");
   assert.match(contact, /JKR with Δγeff/);
   assert.match(contact, /regime/);
-  assert.match(await page.textContent("#readout-traction"), /J\/m²/);
+  assert.match(await page.textContent("#readout-traction"), /\d ± [^ ]+ J\/m²/); // SI values with their errors
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-contact.png"), fullPage: true });
 });
