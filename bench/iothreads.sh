@@ -6,12 +6,9 @@
 #   BUILD=build bench/iothreads.sh
 set -u
 cd "$(dirname "$0")/.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
 SECS=${IO_SECONDS:-5}
 out=bench/results/iothreads.txt
 WRAP=
-SLOW=1
 . tests/lib/daemon.sh # start; the scratch directory $tmp
 command -v wrk >/dev/null || { echo "iothreads.sh: wrk is not installed (make deps)" >&2; exit 1; }
 cat >"$tmp/io.lua" <<'LUA'

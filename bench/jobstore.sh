@@ -10,12 +10,9 @@
 #   BUILD=build bench/jobstore.sh
 set -u
 cd "$(dirname "$0")/.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
 out=bench/results/jobstore.txt
 mkdir -p bench/results
 WRAP=
-SLOW=1
 . tests/lib/daemon.sh # start, req; the scratch directory $tmp
 [ -x "$BIN" ] && [ -x "$BUILD/bench/jobstore" ] || { echo "jobstore.sh: not built" >&2; exit 1; }
 

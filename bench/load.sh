@@ -18,15 +18,12 @@
 #   BUILD=build bench/load.sh
 set -u
 cd "$(dirname "$0")/.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
 SECS=${LOAD_SECONDS:-20}
 CONNS=${LOAD_CONNECTIONS:-16}
 CACHE_MIB=64 # ljgapd's default --cache-bytes bound, in MiB
 out=bench/results/load.txt
 mkdir -p bench/results
 WRAP=
-SLOW=1
 . tests/lib/daemon.sh # start; the scratch directory $tmp
 command -v wrk >/dev/null || { echo "load.sh: wrk is not installed (make deps)" >&2; exit 1; }
 [ -x "$BIN" ] || { echo "load.sh: $BIN is not built" >&2; exit 1; }

@@ -17,15 +17,12 @@
 #   BUILD=build bench/scaleout.sh
 set -u
 cd "$(dirname "$0")/.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
 ROUNDS=${ROUNDS:-3}
 SECS=${SECONDS_EACH:-8}
 out=bench/results/scaleout.txt
 mkdir -p bench/results
 WRAP="nice -n 19"
 NGINX_WRAP="nice -n 19"
-SLOW=1
 . tests/lib/daemon.sh # start; $tmp
 . tests/lib/pg.sh     # free_port
 . tests/lib/nginx.sh  # nginx_conf, nginx_start, nginx_stop

@@ -11,14 +11,11 @@
 #   BUILD=build bench/throughput.sh
 set -u
 cd "$(dirname "$0")/.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
 SECS=${THROUGHPUT_SECONDS:-4}
 ROUNDS=${THROUGHPUT_ROUNDS:-5}
 CORES=$(nproc)
 out=bench/results/throughput.txt
 WRAP=
-SLOW=1
 . tests/lib/daemon.sh # start; the scratch directory $tmp
 command -v wrk >/dev/null || { echo "throughput.sh: wrk is not installed (make deps)" >&2; exit 1; }
 cat >"$tmp/distinct.lua" <<'LUA'

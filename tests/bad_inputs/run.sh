@@ -17,12 +17,7 @@
 #                                                                      exit status checked)
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-CLI=$BUILD/ljgap
-WRAP=${WRAP:-}
-SLOW=1 # multiplier for time bounds
-[ -n "$WRAP" ] && SLOW=5
+SLOW_WRAPPED=5 # the time bounds' multiplier under WRAP
 . tests/lib/daemon.sh # start, req, hdr; the scratch directory $tmp
 
 for b in "$BIN" "$CLI"; do

@@ -6,10 +6,6 @@
 #   BUILD=build tests/contract/run.sh
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-WRAP=${WRAP:-}
-SLOW=1
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start
 
 missing=""

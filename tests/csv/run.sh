@@ -7,10 +7,6 @@
 #   BUILD=build tests/csv/run.sh
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-WRAP=${WRAP:-}
-SLOW=1
 PY=${PY:-python3}
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json
 

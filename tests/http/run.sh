@@ -6,11 +6,7 @@
 #   WRAP="valgrind --leak-check=full --error-exitcode=99" tests/http/run.sh   (slow bounds relax)
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-WRAP=${WRAP:-}
-SLOW=1 # multiplier for time bounds
-[ -n "$WRAP" ] && SLOW=5
+SLOW_WRAPPED=5 # the time bounds' multiplier under WRAP
 
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt
 

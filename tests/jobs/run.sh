@@ -10,12 +10,7 @@
 #   WRAP="valgrind --leak-check=full --error-exitcode=99" tests/jobs/run.sh   (slow bounds relax)
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-CLI=$BUILD/ljgap
-WRAP=${WRAP:-}
-SLOW=1 # multiplier for time bounds
-[ -n "$WRAP" ] && SLOW=10
+SLOW_WRAPPED=10 # the time bounds' multiplier under WRAP
 
 CHECK_PREFIX="jobs: "
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt

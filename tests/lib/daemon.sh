@@ -1,7 +1,16 @@
 # daemon.sh -- helpers for the shell suites that drive build/ljgapd with curl (sourced, not run).
-# The suite sets BIN (the daemon), WRAP (a wrapper such as valgrind, or empty), SLOW (a multiplier
-# for time bounds) and optionally CHECK_PREFIX (put before each check's description). Sourcing
-# makes the scratch directory $tmp and the array pids, both cleaned up on exit.
+# The suite may set, before sourcing: BIN (the daemon; default $BUILD/ljgapd), CLI (the CLI;
+# default $BUILD/ljgap), WRAP (a wrapper such as valgrind; default the environment's, else none),
+# SLOW (a multiplier for time bounds; default 1), SLOW_WRAPPED (SLOW when WRAP is set) and
+# CHECK_PREFIX (put before each check's description). Sourcing makes the scratch directory $tmp
+# and the array pids, both cleaned up on exit.
+
+BUILD=${BUILD:-build}
+BIN=${BIN-$BUILD/ljgapd}
+CLI=${CLI-$BUILD/ljgap}
+WRAP=${WRAP-}
+SLOW=${SLOW:-1}
+[ -n "$WRAP" ] && [ -n "${SLOW_WRAPPED:-}" ] && SLOW=$SLOW_WRAPPED
 
 tmp=$(mktemp -d)
 pids=()

@@ -27,12 +27,8 @@
 set -u
 cd "$(dirname "$0")/../.."
 BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-CLI=$BUILD/ljgap
 UNIT=$BUILD/tests/scaleout/test_jobstore_pg
-WRAP=${WRAP:-}
-SLOW=1 # multiplier for time bounds
-[ -n "$WRAP" ] && SLOW=10
+SLOW_WRAPPED=10 # the time bounds' multiplier under WRAP
 
 CHECK_PREFIX="scaleout: "
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt

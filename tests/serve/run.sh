@@ -7,11 +7,7 @@
 #   BUILD=build tests/serve/run.sh
 set -u
 cd "$(dirname "$0")/../.."
-BUILD=${BUILD:-build}
-BIN=$BUILD/ljgapd
-WRAP=${WRAP:-}
-SLOW=1
-[ -n "$WRAP" ] && SLOW=5
+SLOW_WRAPPED=5 # the time bounds' multiplier under WRAP
 CLIENTS="python3 tests/serve/clients.py"
 
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json, elapsed, lt

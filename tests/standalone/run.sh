@@ -11,8 +11,6 @@ cd "$(dirname "$0")/../.."
 ROOT=$PWD
 BUILD=${BUILD:-build}
 BIN=$ROOT/$BUILD/ljgapd
-WRAP=${WRAP:-}
-SLOW=1
 . tests/lib/daemon.sh # tmp, pids, cleanup; check, start, req, hdr, json
 
 # ---- nothing outside the repository ----
