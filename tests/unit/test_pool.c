@@ -99,6 +99,13 @@ static void finish(test_task *x)
     WAIT_FOR(atomic_load(&x->woken) == 1);
 }
 
+/* Releases tasks t[from..to), running or yet to run. */
+static void release_all(test_task *t, int from, int to)
+{
+    for (int i = from; i < to; i++)
+        atomic_store(&t[i].release, 1);
+}
+
 static void test_first_come_first_served(void **state)
 {
     pool *p = start(1, 8, 10);
@@ -136,8 +143,7 @@ static void test_fair_free_slots(void **state)
         WAIT_FOR(atomic_load(&n_started) == 3);
         assert_int_equal(atomic_load(&order[2]), 3);
     }
-    for (int i = 0; i < 4; i++)
-        atomic_store(&t[i].release, 1);
+    release_all(t, 0, 4);
     WAIT_FOR(atomic_load(&n_started) == 4);
     pool_free(p);
 }
@@ -177,8 +183,7 @@ static void test_fair_two_slots(void **state)
     finish(&t[1]);
     WAIT_FOR(atomic_load(&n_started) == 4);
     assert_int_equal(atomic_load(&order[3]), 2);
-    for (int i = 2; i < 6; i++)
-        atomic_store(&t[i].release, 1);
+    release_all(t, 2, 6);
     WAIT_FOR(atomic_load(&n_started) == 6);
     pool_free(p);
 }
@@ -199,8 +204,7 @@ static void test_queue_bound(void **state)
     assert_int_equal(st.full, 1);
     assert_int_equal(st.running + st.waiting, 3);
     assert_true(pool_retry_after(p) >= 1 && pool_retry_after(p) <= 60);
-    for (int i = 0; i < 3; i++)
-        atomic_store(&t[i].release, 1);
+    release_all(t, 0, 3);
     pool_free(p);
     assert_int_equal(atomic_load(&t[3].woken), 0);
 }
