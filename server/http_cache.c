@@ -161,8 +161,15 @@ int http_cache_get(http_cache *c, const char *key, size_t klen, int *status, cha
 int http_cache_put(http_cache *c, const char *key, size_t klen, int status, const char *val,
                    size_t vlen)
 {
+    return http_cache_put2(c, key, klen, status, val, vlen, NULL, 0);
+}
+
+int http_cache_put2(http_cache *c, const char *key, size_t klen, int status, const char *head,
+                    size_t hlen, const char *tail, size_t tlen)
+{
     uint64_t h = cache__hash(key, klen);
     entry *e = NULL, *old = NULL;
+    size_t vlen = hlen + tlen;
 
     if (klen + vlen > c->max_bytes) return -1;
     e = malloc(sizeof *e + klen + vlen + 1);
@@ -172,7 +179,8 @@ int http_cache_put(http_cache *c, const char *key, size_t klen, int status, cons
     e->klen = klen;
     e->vlen = vlen;
     memcpy(e->data, key, klen);
-    memcpy(e->data + klen, val, vlen);
+    if (hlen) memcpy(e->data + klen, head, hlen);
+    if (tlen) memcpy(e->data + klen + hlen, tail, tlen);
     e->data[klen + vlen] = '\0';
 
     pthread_mutex_lock(&c->lock);

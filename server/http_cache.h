@@ -33,6 +33,11 @@ int http_cache_get(http_cache *c, const char *key, size_t klen, int *status, cha
 int http_cache_put(http_cache *c, const char *key, size_t klen, int status, const char *val,
                    size_t vlen);
 
+/* The same with the value given in two parts, stored as head then tail (an answer with its last
+ * bytes replaced, without a copy of the whole answer first). */
+int http_cache_put2(http_cache *c, const char *key, size_t klen, int status, const char *head,
+                    size_t hlen, const char *tail, size_t tlen);
+
 /* Entries and bytes held now (for tests and logs). */
 void http_cache_stats(http_cache *c, size_t *entries, size_t *bytes);
 

@@ -1,5 +1,6 @@
 /* test_http_cache.c -- the daemon's LRU cache: hits copy, both bounds evict the least recently
- * used entry, replacing a key keeps one entry, oversize values are refused. */
+ * used entry, replacing a key keeps one entry, oversize values are refused, a value given in
+ * two parts is stored as one. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -89,12 +90,33 @@ static void test_byte_bound(void **state)
     http_cache_free(c);
 }
 
+/* http_cache_put2: head then tail, counted whole against the byte bound. */
+static void test_two_parts(void **state)
+{
+    (void)state;
+    http_cache *c = http_cache_alloc(4, 24);
+    size_t n, bytes;
+    assert_non_null(c);
+    assert_int_equal(http_cache_put2(c, "k", 1, 200, "{\"a\":1,", 7, "\"b\":2}", 6), 0);
+    assert_int_equal(has(c, "k", "{\"a\":1,\"b\":2}"), 1);
+    assert_int_equal(http_cache_put2(c, "h", 1, 200, "head", 4, NULL, 0), 0);
+    assert_int_equal(has(c, "h", "head"), 1);
+    http_cache_stats(c, &n, &bytes);
+    assert_int_equal(n, 2);
+    assert_int_equal(bytes, 1 + 13 + 1 + 4);
+    /* the two parts together exceed the bound, though each alone would not */
+    assert_int_equal(http_cache_put2(c, "x", 1, 200, "0123456789", 10, "0123456789abcd", 14), -1);
+    assert_int_equal(has(c, "k", "{\"a\":1,\"b\":2}"), 1);
+    http_cache_free(c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hit_miss_replace),
         cmocka_unit_test(test_entry_bound_evicts_lru),
         cmocka_unit_test(test_byte_bound),
+        cmocka_unit_test(test_two_parts),
     };
     return cmocka_run_group_tests_name("http_cache", tests, NULL, NULL);
 }
