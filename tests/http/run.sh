@@ -341,7 +341,8 @@ if start limit --connections 4 --compute-slots 1; then
     check "once they close, connections are accepted again" eval '[ "$STATUS" = 200 ]'
     kill -TERM "$PID"
     wait "$PID"
-    check "exit 0 with idle connections" eval '[ $? = 0 ]'
+    rc=$?
+    check "exit 0 with idle connections (status $rc)" eval '[ "$rc" = 0 ]'
 else
     echo "not ok - third server did not start"
 fi

@@ -24,6 +24,12 @@ else
     echo "not ok - not a git checkout: cannot list the tracked files"
 fi
 
+# ---- checks that can fail ----
+# check DESC eval '... $? ...' tests the status of check's own shift, not the command before the
+# check (always 0): such a check cannot fail. The suites keep the status in a variable instead.
+dead=$(grep -n -E "eval +['\"] *\[ *\"?\\\$\?" tests/*.sh tests/*/*.sh bench/*.sh 2>/dev/null | head -n 3)
+check "no shell check tests \$? inside its own eval${dead:+ ($dead)}" [ -z "$dead" ]
+
 # ---- dependencies by goal: make run installs only what building and serving need ----
 # What each goal would install (the Makefile's GOAL_DEBS.G and GOAL_CMDS.G, package names after
 # the colon), printed by make itself without installing anything.
