@@ -258,16 +258,26 @@ static void json_periodic_map(void **state)
     assert_string_equal(get(grid, "window")->valuestring, "none");
     near(num(grid, "k_min"), 2 * M_PI / (64 * 2e-8), 1, "k_min");
     near(num(grid, "k_max"), M_PI / 2e-8, 1, "k_max");
-    /* the psd object: the bins and the fitted tail, nothing about the theory's domain */
+    /* the psd object: the band's lower edge, the bins, the band's upper edge (issue 25), with
+     * P_err and the fitted tail with its error, nothing about the theory's domain */
     psd = get(a.body, "psd");
     assert_string_equal(get(psd, "kind")->valuestring, "table");
-    char *ks = cJSON_PrintUnformatted(get(psd, "k")), *ka = cJSON_PrintUnformatted(k);
-    assert_string_equal(ks, ka);
+    const cJSON *pk = get(psd, "k"), *rel = get(a.body, "reliable");
+    assert_int_equal(cJSON_GetArraySize(pk), n + 2);
+    assert_int_equal(cJSON_GetArraySize(get(psd, "P_err")), n + 2);
+    near(cJSON_GetArrayItem(pk, 0)->valuedouble, num(rel, "k_min"), 0, "starts at the band");
+    assert_true(cJSON_GetArrayItem(pk, 0)->valuedouble < cJSON_GetArrayItem(k, 0)->valuedouble);
+    for (size_t i = 0; i < n; i++)
+        near(cJSON_GetArrayItem(pk, (int)i + 1)->valuedouble,
+             cJSON_GetArrayItem(k, (int)i)->valuedouble, 0, "the bins' k");
+    assert_true(cJSON_GetArrayItem(pk, (int)n + 1)->valuedouble <= num(rel, "k_max"));
+    assert_string_equal(get(rel, "by")->valuestring, "nyquist");
     near(num(get(psd, "tail"), "exponent"), 2 * num(fit, "D") - 8, 1e-12, "tail exponent");
+    near(num(get(psd, "tail"), "exponent_err"), 2 * num(get(err, "fit"), "D"), 1e-12,
+         "tail exponent's error");
+    assert_string_equal(get(grid, "detrend")->valuestring, "mean");
     assert_null(cJSON_GetObjectItemCaseSensitive(a.body, "domain"));
     assert_null(cJSON_GetObjectItemCaseSensitive(a.body, "si"));
-    free(ks);
-    free(ka);
     cJSON_Delete(a.body);
     free(req);
     free(m.h);
