@@ -763,7 +763,10 @@ static int run_psd(job *j)
     put_num(j, grid, "dy", t->dy, "grid.dy", -1);
     put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
     put(j, grid, "profile", cJSON_CreateBool(r.profile));
-    put(j, grid, "detrend", cJSON_CreateString(ljgap_topo_detrend_name(r.detrend)));
+    put(j, grid, "detrend",
+        cJSON_CreateString(r.profile && r.detrend == LJGAP_DETREND_PLANE
+                               ? "line"
+                               : ljgap_topo_detrend_name(r.detrend)));
     put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
     put_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
     put_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);

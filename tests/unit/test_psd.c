@@ -643,6 +643,92 @@ static void bad_text_query(void **state)
     free(t);
 }
 
+/* ---- the inputs of issue 25: fit band, detrend, tip radius, resolution, P_err ---- */
+
+static void new_inputs(void **state)
+{
+    map m = make_map(64, 64, 1e-8, 2.4, 1e-9, 21);
+    double kf = 2 * M_PI / (64 * 1e-8);
+    buf x = {0};
+    add(&x, ",\"fit\":{\"k_min\":%.17g,\"k_max\":%.17g}", 2 * kf, 20 * kf);
+    char *req = map_json(&m, 0, x.s);
+    answer a = ask("psd", req);
+    assert_int_equal(a.status, 200);
+    const cJSON *fit = get(a.body, "fit");
+    assert_string_equal(get(fit, "band")->valuestring, "given");
+    assert_true(num(fit, "k_min") >= 2 * kf * (1 - 1e-9) && num(fit, "k_max") <= 20 * kf);
+    assert_string_equal(get(get(a.body, "grid"), "detrend")->valuestring, "plane");
+    cJSON_Delete(a.body), free(req), free(x.s);
+    /* the same from a text upload's query */
+    char *t = map_text(&m, 0);
+    x = (buf){0};
+    add(&x, "dx=1e-8&fit_k_min=%.17g&fit_k_max=%.17g&detrend=lines&resolution=1e-7", 2 * kf,
+        20 * kf);
+    a = ask_text("psd", x.s, t, strlen(t));
+    assert_int_equal(a.status, 200);
+    assert_string_equal(get(get(a.body, "fit"), "band")->valuestring, "given");
+    assert_string_equal(get(get(a.body, "grid"), "detrend")->valuestring, "lines");
+    assert_string_equal(get(get(a.body, "reliable"), "by")->valuestring, "resolution");
+    near(num(get(a.body, "reliable"), "k_max"), M_PI / 1e-7, 1e-3, "pi / resolution");
+    cJSON_Delete(a.body), free(x.s);
+    /* bad values at their pointers, JSON and query */
+    const char *topo = ",\"dx\":1e-8";
+    char rest[200];
+    const struct {
+        const char *field, *ptr;
+    } bad[] = {{"\"detrend\":\"tilt\"", "/topography/detrend"},
+               {"\"detrend\":3", "/topography/detrend"},
+               {"\"tip_radius\":-1e-8", "/topography/tip_radius"},
+               {"\"tip_radius\":\"big\"", "/topography/tip_radius"},
+               {"\"resolution\":0", "/topography/resolution"},
+               {"\"resolution\":1e9", "/topography/resolution"}};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        snprintf(rest, sizeof rest, "%s,%s", topo, bad[i].field);
+        expect_json(bad_json("1e-9", 0, 0, NULL, rest, NULL), bad[i].ptr, bad[i].field);
+    }
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"k_min\":-1}"), "/fit/k_min",
+                "k_min < 0");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"k_min\":1e8,\"k_max\":1e7}"),
+                "/fit/k_max", "k_max below k_min");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"kmin\":1e8}"), "/fit/kmin",
+                "unknown field of fit");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":[1,2]"), "/fit", "fit an array");
+    expect_text("dx=1e-8&fit_k_min=abc", map_text(&m, 0), "/fit/k_min", NULL, "fit_k_min a word");
+    expect_text("dx=1e-8&tip_radius=-1", map_text(&m, 0), "/topography/tip_radius", NULL,
+                "tip_radius < 0");
+    expect_text("dx=1e-8&detrend=tilt", map_text(&m, 0), "/topography/detrend", NULL,
+                "detrend tilt");
+    free(t);
+    /* P_err and tail.exponent_err of a table: accepted, checked */
+    const char *tab = "{\"psd\":{\"kind\":\"table\",\"k\":[1,2,4],\"P\":[1e-3,2e-4,3e-5]%s},"
+                      "\"tol\":1e-4}";
+    const struct {
+        const char *extra, *ptr;
+    } tb[] = {{",\"P_err\":[1e-4,1e-5,-1e-6]", "/psd/P_err/2"},
+              {",\"P_err\":[1e-4,\"x\",1e-6]", "/psd/P_err/1"},
+              {",\"P_err\":[1e-4,1e-5]", "/psd/P_err"},
+              {",\"P_err\":3", "/psd/P_err"},
+              {",\"tail\":{\"exponent\":-3,\"exponent_err\":-0.1}", "/psd/tail/exponent_err"},
+              {",\"tail\":{\"exponent\":-3,\"exponent_err\":\"a\"}", "/psd/tail/exponent_err"}};
+    for (size_t i = 0; i < sizeof tb / sizeof *tb; i++) {
+        x = (buf){0};
+        add(&x, tab, tb[i].extra);
+        expect_one(ask("adhesion", x.s), tb[i].ptr, NULL, tb[i].extra);
+        free(x.s);
+    }
+    x = (buf){0};
+    add(&x, tab, ",\"P_err\":[1e-4,0,1e-6],\"tail\":{\"exponent\":-3,\"exponent_err\":0.1}");
+    buf y = {0};
+    add(&y, tab, ",\"tail\":{\"exponent\":-3}");
+    a = ask("adhesion", x.s);
+    answer b = ask("adhesion", y.s);
+    assert_int_equal(a.status, 200);
+    assert_int_equal(b.status, 200);
+    near(num(a.body, "dgamma_eff"), num(b.body, "dgamma_eff"), 0, "the errors change nothing");
+    cJSON_Delete(a.body), cJSON_Delete(b.body), free(x.s), free(y.s);
+    free(m.h);
+}
+
 /* ---- out of memory, threads ---- */
 
 static void out_of_memory(void **state)
@@ -717,6 +803,7 @@ int main(void)
         cmocka_unit_test(bad_json_inputs),
         cmocka_unit_test(bad_text_inputs),
         cmocka_unit_test(bad_text_query),
+        cmocka_unit_test(new_inputs),
         cmocka_unit_test(out_of_memory),
         cmocka_unit_test(concurrent_with_simulation),
     };
