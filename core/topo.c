@@ -618,10 +618,9 @@ static int fit_band(const double *k, const double *P, const double *modes, doubl
             for (size_t b = hi; b >= a + 2 && (!fix_hi || b == hi); b--) {
                 double w = log10(k[b] / k[a]);
                 if (w < TOPO_BAND_MIN && !(a == lo && b == hi)) break; /* narrower from here */
-                if (w < bw - 1e-9) break;
                 if (window_fit(k, P, modes, var_extra, a, b, Z, &t, &ok) || !ok) continue;
                 t.sound = pass == 0;
-                if (w > bw + 1e-9 || t.chi2_red < best.chi2_red) best = t, bw = w;
+                if (bw < 0 || t.D.err < best.D.err) best = t, bw = w;
             }
     if (bw < 0) {
         if (fit_power(k + lo, P + lo, modes + lo, var_extra, hi - lo + 1, 0, INFINITY, f))
