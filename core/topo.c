@@ -434,26 +434,49 @@ static int binner_out(const binner *b, bins *o)
 
 #define TOPO_SLOPE_MIN -10.0 /* bounds of the local slope the curvature correction uses */
 #define TOPO_SLOPE_MAX 2.0
-#define TOPO_SLOPE_REACH 2 /* the local slope: from the bins i - 2 ... i + 2 */
+#define TOPO_SLOPE_REACH 2 /* the local slope: from windows of 2 × 2 + 1 bins */
 
-/* The local slope of ln P at every bin (into s): the weighted least-squares slope of the bins
- * i - TOPO_SLOPE_REACH ... i + TOPO_SLOPE_REACH (weights and digamma shift as in fit_power),
- * within [TOPO_SLOPE_MIN, TOPO_SLOPE_MAX]. From the raw bins only: nothing fitted feeds back
- * into it (a slope fitted across a roll-off once ran the correction away, issue 25). */
+/* The weighted least-squares slope of ln P over the bins [a, b] (weights and digamma shift as
+ * in fit_power) and its χ² per degree of freedom (0 with two bins); -1 with fewer than 2. */
+static int slope_of(const double *k, const double *P, const double *modes, size_t a, size_t b,
+                    double *slope, double *chi2)
+{
+    double S = 0, Sx = 0, Sy = 0, Sxx = 0, Sxy = 0, Syy = 0;
+    size_t m = 0;
+    for (size_t j = a; j <= b; j++) {
+        if (!(P[j] > 0) || !(modes[j] > 0)) continue;
+        double w = 1 / gsl_sf_psi_1(modes[j]), x = log(k[j]);
+        double y = log(P[j]) - gsl_sf_psi(modes[j]) + log(modes[j]);
+        S += w, Sx += w * x, Sy += w * y, Sxx += w * x * x, Sxy += w * x * y, Syy += w * y * y;
+        m++;
+    }
+    double vx = Sxx - Sx * Sx / S, cxy = Sxy - Sx * Sy / S, vy = Syy - Sy * Sy / S;
+    if (m < 2 || !(vx > 1e-12 * Sxx)) return -1;
+    *slope = cxy / vx;
+    *chi2 = m > 2 ? fmax(vy - cxy * cxy / vx, 0) / (double)(m - 2) : 0;
+    return isfinite(*slope) ? 0 : -1;
+}
+
+/* The local slope of ln P at every bin (into s): of the windows of TOPO_SLOPE_REACH + 1 bins
+ * that hold bin i (i at their left end, centre or right end), the slope of the one that is
+ * most straight (least χ² per degree of freedom), so that a bin next to a cutoff or a corner
+ * takes its slope from its own side; within [TOPO_SLOPE_MIN, TOPO_SLOPE_MAX]. From the raw
+ * bins only: nothing fitted feeds back into it (a slope fitted across a roll-off once ran the
+ * correction away, issue 25). */
 static void local_slopes(const double *k, const double *P, const double *modes, size_t n, double *s)
 {
+    const size_t w = 2 * TOPO_SLOPE_REACH;
     for (size_t i = 0; i < n; i++) {
-        size_t a = i > TOPO_SLOPE_REACH ? i - TOPO_SLOPE_REACH : 0;
-        size_t b = i + TOPO_SLOPE_REACH < n ? i + TOPO_SLOPE_REACH : n - 1;
-        double S = 0, Sx = 0, Sy = 0, Sxx = 0, Sxy = 0;
-        for (size_t j = a; j <= b; j++) {
-            if (!(P[j] > 0) || !(modes[j] > 0)) continue;
-            double w = 1 / gsl_sf_psi_1(modes[j]), x = log(k[j]);
-            double y = log(P[j]) - gsl_sf_psi(modes[j]) + log(modes[j]);
-            S += w, Sx += w * x, Sy += w * y, Sxx += w * x * x, Sxy += w * x * y;
+        double best = INFINITY, v = 0, sl, c2;
+        for (int side = 0; side < 3; side++) {
+            size_t a = side == 0   ? i
+                       : side == 1 ? (i >= w / 2 ? i - w / 2 : 0)
+                                   : (i >= w ? i - w : 0);
+            size_t b = a + w < n ? a + w : n - 1;
+            if (b <= a || slope_of(k, P, modes, a, b, &sl, &c2)) continue;
+            if (c2 < best) best = c2, v = sl;
         }
-        double den = S * Sxx - Sx * Sx, v = den > 1e-12 * S * Sxx ? (S * Sxy - Sx * Sy) / den : 0;
-        s[i] = isfinite(v) ? fmin(fmax(v, TOPO_SLOPE_MIN), TOPO_SLOPE_MAX) : 0;
+        s[i] = fmin(fmax(v, TOPO_SLOPE_MIN), TOPO_SLOPE_MAX);
     }
 }
 
