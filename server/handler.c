@@ -623,13 +623,23 @@ static size_t topo_cap(void)
                                                : LJGAP_TOPO_POINTS_DEFAULT);
 }
 
-/* Does the fit stand for the spectrum up to the table's end (its band reaching the last
- * reliable bin but one), soundly, with an exponent below -2? Then the tail continues it. */
+/* Does the fit stand for the spectrum up to the table's end, soundly, with an exponent below
+ * -2? Then the tail continues it. Up to the end: every reliable bin above the fit's band lies
+ * within TAIL_BINS_SIGMA errors (and TAIL_BINS_REL) of the fitted law, so that a cutoff, a noise
+ * floor or the tip's trace above the band stops the tail while a band that merely stops a bin
+ * or two short of the end does not. */
+#define TAIL_BINS_SIGMA 3
+#define TAIL_BINS_REL 0.1
 static int fit_gives_tail(const ljgap_topo_result *r)
 {
-    size_t last = r->rel_last;
-    return r->has_fit && r->fit.sound && 2 * r->fit.D.value - 8 < -2 &&
-           r->fit.kmax >= r->k[last > r->rel_first ? last - 1 : last];
+    if (!r->has_fit || !r->fit.sound || !(2 * r->fit.D.value - 8 < -2)) return 0;
+    for (size_t i = r->rel_first; i <= r->rel_last && i < r->n; i++) {
+        if (r->k[i] <= r->fit.kmax * (1 + 1e-9)) continue;
+        double law = r->fit.C.value * pow(r->k[i], 2 * r->fit.D.value - 8);
+        if (!(fabs(log(r->P[i] / law)) <= TAIL_BINS_SIGMA * r->P_err[i] / r->P[i] + TAIL_BINS_REL))
+            return 0;
+    }
+    return 1;
 }
 
 /* The psd object for /v1/adhesion with "units":"SI": the reliable bins from k_from on as a

@@ -20,6 +20,7 @@
 #include "ljgap.h"
 #include "ljgap_sim.h"
 
+#include "../lib/realsurf.h"
 #include "../lib/synth.h"
 
 #include <cjson/cJSON.h>
@@ -643,6 +644,42 @@ static void bad_text_query(void **state)
     free(t);
 }
 
+/* A measured-like map (roll-off, cutoff at 20 k_f): the fit is sound inside its band, the psd
+ * object keeps the bins up to Nyquist without a tail (the bins above the band leave the law),
+ * a warning says so; the same surface without the cutoff gets the tail. */
+static void tail_only_where_the_law_holds(void **state)
+{
+    const size_t n = 128;
+    double kf = 2 * M_PI / (n * 1e-8), m0;
+    map m = {n, n, 1e-8, malloc(n * n * sizeof(double)), 0};
+    assert_non_null(m.h);
+    for (int cut = 1; cut >= 0; cut--) {
+        realsurf_spec s = {0};
+        s.D = 2.4, s.k_r = 2 * kf, s.k_c = cut ? 20 * kf : 0;
+        s.C = realsurf_level(s.D, s.k_r, M_PI / 1e-8, 1e-18);
+        assert_int_equal(realsurf_make(m.h, n, n, 1e-8, 1e-8, &s, 4, &m0), 0);
+        char *req = map_json(&m, 1, NULL);
+        answer a = ask("psd", req);
+        assert_int_equal(a.status, 200);
+        const cJSON *fit = get(a.body, "fit"), *psd = get(a.body, "psd");
+        assert_true(cJSON_IsTrue(get(fit, "sound")));
+        near(num(fit, "D"), 2.4, 0.1, "D");
+        assert_int_equal(cJSON_GetArraySize(get(psd, "P_err")), cJSON_GetArraySize(get(psd, "k")));
+        if (cut) {
+            assert_true(num(fit, "k_max") <= 20 * kf * 1.13);
+            assert_null(cJSON_GetObjectItemCaseSensitive(psd, "tail"));
+            char *w = cJSON_PrintUnformatted(get(get(a.body, "meta"), "warnings"));
+            assert_non_null(strstr(w, "the psd object has no tail"));
+            free(w);
+        } else {
+            near(num(get(psd, "tail"), "exponent"), 2 * num(fit, "D") - 8, 1e-12, "tail");
+        }
+        cJSON_Delete(a.body);
+        free(req);
+    }
+    free(m.h);
+}
+
 /* ---- the inputs of issue 25: fit band, detrend, tip radius, resolution, P_err ---- */
 
 static void new_inputs(void **state)
@@ -804,6 +841,7 @@ int main(void)
         cmocka_unit_test(bad_text_inputs),
         cmocka_unit_test(bad_text_query),
         cmocka_unit_test(new_inputs),
+        cmocka_unit_test(tail_only_where_the_law_holds),
         cmocka_unit_test(out_of_memory),
         cmocka_unit_test(concurrent_with_simulation),
     };
