@@ -151,7 +151,29 @@ static void detrend(double *a, size_t nx, size_t ny, ljgap_topo_detrend mode)
         }
         return;
     }
-    const int np = mode == LJGAP_DETREND_MEAN ? 1 : mode == LJGAP_DETREND_PLANE ? 3 : 6;
+    if (mode != LJGAP_DETREND_CURVATURE) { /* mean or plane: the three sums alone (fast) */
+        long double sm = 0, sx = 0, sy = 0, bx = 0, by = 0;
+        for (size_t j = 0; j < ny; j++) {
+            long double y = (long double)j - yc, r = 0, rx = 0;
+            for (size_t i = 0; i < nx; i++) {
+                long double h = a[j * nx + i];
+                r += h, rx += h * ((long double)i - xc);
+            }
+            sm += r, sx += rx, sy += r * y;
+        }
+        long double N = (long double)nx * (long double)ny, mean = sm / N;
+        if (mode == LJGAP_DETREND_PLANE) {
+            if (mx2 > 0) bx = sx / (mx2 * N);
+            if (my2 > 0) by = sy / (my2 * N);
+        }
+        for (size_t j = 0; j < ny; j++) {
+            double off = (double)(mean + by * ((long double)j - yc));
+            for (size_t i = 0; i < nx; i++)
+                a[j * nx + i] = (double)(a[j * nx + i] - (off + bx * ((long double)i - xc)));
+        }
+        return;
+    }
+    const int np = 6;
     long double num[6] = {0}, den[6] = {0}, c[6] = {0}, phi[6];
     for (int pass = 0; pass < 2; pass++)
         for (size_t j = 0; j < ny; j++) {
