@@ -68,6 +68,7 @@
 
 #include <fftw3.h>
 #include <float.h>
+#include <gsl/gsl_sf_bessel.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <gsl/gsl_sf_psi.h>
 #include <math.h>
@@ -91,6 +92,9 @@ void ljgap_topo_opts_default(ljgap_topo_opts *o)
     o->bins_per_decade = 10;
     o->fit_kmin = 0;
     o->fit_kmax = 0;
+    o->detrend = LJGAP_DETREND_AUTO;
+    o->tip_radius = 0;
+    o->resolution = 0;
     o->cancel = NULL;
 }
 
@@ -101,6 +105,10 @@ void ljgap_topo_result_free(ljgap_topo_result *res)
     free(res->P);
     free(res->P_err);
     free(res->modes);
+    free(res->lo);
+    free(res->hi);
+    free(res->var);
+    free(res->slope);
     free(res->PP);
     free(res->PP_err);
     memset(res, 0, sizeof *res);
@@ -120,34 +128,95 @@ static double abel_dlog(double alpha)
 
 /* ---- detrending and window ---- */
 
-/* Removes the mean (periodic) or the least-squares plane, in place; a is [ny][nx]. On the
- * centred coordinates the normal equations are diagonal: b = Σ h (i - ī) / Σ (i - ī)². The
- * sums run in long double, so that a map that is a plane (or constant) leaves only the rounding
- * of its own heights. */
-static void detrend(double *a, size_t nx, size_t ny, int plane)
+/* Removes what mode says, in place; a is [ny][nx] (a profile: ny = 1). On the centred
+ * coordinates x = i - ī, y = j - ȳ the polynomials 1, x, y, x² - <x²>, xy, y² - <y²> are
+ * orthogonal over the full grid, so each least-squares coefficient is Σ h φ / Σ φ² on its own
+ * (mean: the first; plane: three; curvature: all six; a profile has y = 0 and keeps those of
+ * x). lines: each row's own mean and slope along x (AFM scan lines with their offsets and
+ * tilts). The sums run in long double, so that a map that is a plane (or constant) leaves only
+ * the rounding of its own heights. */
+static void detrend(double *a, size_t nx, size_t ny, ljgap_topo_detrend mode)
 {
-    size_t N = nx * ny;
-    long double s = 0, sx = 0, sy = 0, xc = 0.5L * (long double)(nx - 1);
-    long double yc = 0.5L * (long double)(ny - 1), bx = 0, by = 0;
-    for (size_t j = 0; j < ny; j++)
-        for (size_t i = 0; i < nx; i++) {
-            long double h = a[j * nx + i];
-            s += h;
-            sx += h * ((long double)i - xc);
-            sy += h * ((long double)j - yc);
+    const long double xc = 0.5L * (long double)(nx - 1), yc = 0.5L * (long double)(ny - 1);
+    const long double mx2 = ((long double)nx * nx - 1) / 12, my2 = ((long double)ny * ny - 1) / 12;
+    if (mode == LJGAP_DETREND_LINES) {
+        for (size_t j = 0; j < ny; j++) {
+            double *r = a + j * nx;
+            long double s = 0, sx = 0;
+            for (size_t i = 0; i < nx; i++)
+                s += r[i], sx += r[i] * ((long double)i - xc);
+            long double m = s / (long double)nx, bx = mx2 > 0 ? sx / (mx2 * (long double)nx) : 0;
+            for (size_t i = 0; i < nx; i++)
+                r[i] = (double)(r[i] - (m + bx * ((long double)i - xc)));
         }
-    long double mean = s / (long double)N;
-    if (plane) {
-        /* Σ over the map of (i - ī)² = ny · nx (nx² - 1)/12 */
-        long double vx = (long double)ny * nx * ((long double)nx * nx - 1) / 12;
-        long double vy = (long double)nx * ny * ((long double)ny * ny - 1) / 12;
-        if (vx > 0) bx = sx / vx;
-        if (vy > 0) by = sy / vy;
+        return;
     }
-    for (size_t j = 0; j < ny; j++)
-        for (size_t i = 0; i < nx; i++)
-            a[j * nx + i] = (double)(a[j * nx + i] - (mean + bx * ((long double)i - xc) +
-                                                      by * ((long double)j - yc)));
+    if (mode != LJGAP_DETREND_CURVATURE) { /* mean or plane: the three sums alone (fast) */
+        long double sm = 0, sx = 0, sy = 0, bx = 0, by = 0;
+        for (size_t j = 0; j < ny; j++) {
+            long double y = (long double)j - yc, r = 0, rx = 0;
+            for (size_t i = 0; i < nx; i++) {
+                long double h = a[j * nx + i];
+                r += h, rx += h * ((long double)i - xc);
+            }
+            sm += r, sx += rx, sy += r * y;
+        }
+        long double N = (long double)nx * (long double)ny, mean = sm / N;
+        if (mode == LJGAP_DETREND_PLANE) {
+            if (mx2 > 0) bx = sx / (mx2 * N);
+            if (my2 > 0) by = sy / (my2 * N);
+        }
+        for (size_t j = 0; j < ny; j++) {
+            double off = (double)(mean + by * ((long double)j - yc));
+            for (size_t i = 0; i < nx; i++)
+                a[j * nx + i] = (double)(a[j * nx + i] - (off + bx * ((long double)i - xc)));
+        }
+        return;
+    }
+    const int np = 6;
+    long double num[6] = {0}, den[6] = {0}, c[6] = {0}, phi[6];
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t j = 0; j < ny; j++) {
+            long double y = (long double)j - yc;
+            for (size_t i = 0; i < nx; i++) {
+                long double x = (long double)i - xc, h = a[j * nx + i], fit = 0;
+                phi[0] = 1, phi[1] = x, phi[2] = y;
+                phi[3] = x * x - mx2, phi[4] = x * y, phi[5] = y * y - my2;
+                for (int p = 0; p < np; p++) {
+                    if (pass == 0)
+                        num[p] += h * phi[p], den[p] += phi[p] * phi[p];
+                    else
+                        fit += c[p] * phi[p];
+                }
+                if (pass == 1) a[j * nx + i] = (double)(h - fit);
+            }
+            if (pass == 0 && j + 1 == ny)
+                for (int p = 0; p < np; p++)
+                    c[p] = den[p] > 0 ? num[p] / den[p] : 0;
+        }
+}
+
+const char *ljgap_topo_detrend_name(ljgap_topo_detrend d)
+{
+    switch (d) {
+    case LJGAP_DETREND_MEAN:
+        return "mean";
+    case LJGAP_DETREND_PLANE:
+        return "plane";
+    case LJGAP_DETREND_LINES:
+        return "lines";
+    case LJGAP_DETREND_CURVATURE:
+        return "curvature";
+    default:
+        return "auto";
+    }
+}
+
+int ljgap_topo_detrend_parse(const char *name)
+{
+    for (int d = LJGAP_DETREND_MEAN; d <= LJGAP_DETREND_CURVATURE; d++)
+        if (name && strcmp(name, ljgap_topo_detrend_name((ljgap_topo_detrend)d)) == 0) return d;
+    return -1;
 }
 
 /* The periodic Hann window of length n at i, w = (1 - cos(2πi/n))/2 (1 when n == 1). */
@@ -200,6 +269,8 @@ typedef struct {
     double *sP;  /* Σ periodogram */
     double *cor; /* windowed: Σ over the bin's modes of the in-bin correlation sum (see
                   * bin_correlations); NULL unwindowed (each mode correlates with itself only) */
+    double cell; /* the lattice's cell: Δqx Δqy (a map) or Δk (a profile) */
+    int line;    /* 1: a profile (cells along a line) */
 } binner;
 
 static int binner_alloc(binner *b, double kf, double knyq, double B, int windowed)
@@ -310,6 +381,8 @@ typedef struct {
     double *k, *P, *P_err; /* geometric mean |q|, mean periodogram, its standard error */
     double *modes;         /* independent modes (window-corrected) */
     double *kap;           /* 2 a bin: the variance and third cumulant of ln |q| over the modes */
+    double *lo, *hi;       /* the band the bin's modes cover (see binner_out) */
+    double *var;           /* Σ P × cell over the bin's modes */
 } bins;
 
 static void bins_free(bins *o)
@@ -319,24 +392,43 @@ static void bins_free(bins *o)
     free(o->P_err);
     free(o->modes);
     free(o->kap);
+    free(o->lo);
+    free(o->hi);
+    free(o->var);
     memset(o, 0, sizeof *o);
+}
+
+/* The edge of the disc (a map: π e² = cells × cell) or interval (a profile: 2e = cells × Δk)
+ * of c lattice cells around k = 0. */
+static double cells_edge(const binner *b, double c)
+{
+    return b->line ? 0.5 * c * b->cell : sqrt(c * b->cell / M_PI);
 }
 
 /* The non-empty bins into o. A bin of cnt modes has cnt/2 independent ones unwindowed,
  * (cnt/2) · cnt/cor windowed (eff); E[P̄²] = P²(1 + 1/eff), so P̄/√(eff + 1) estimates the
- * standard error P/√eff without bias. */
+ * standard error P/√eff without bias. The band a bin stands for: every mode stands for its
+ * cell of the lattice, so the modes up to and including bin b (and the zero mode) cover the
+ * disc of the same area; lo and hi are that disc's radius before and after the bin (the
+ * fundamental modes of a periodic map, at |q| = k_f, cover k_f/√π to √(5/π) k_f). */
 static int binner_out(const binner *b, bins *o)
 {
     size_t m = 0;
     for (size_t i = 0; i < b->nb; i++)
         m += b->cnt[i] > 0;
     memset(o, 0, sizeof *o);
-    o->k = malloc((m ? m : 1) * sizeof *o->k);
-    o->P = malloc((m ? m : 1) * sizeof *o->P);
-    o->P_err = malloc((m ? m : 1) * sizeof *o->P_err);
-    o->modes = malloc((m ? m : 1) * sizeof *o->modes);
-    o->kap = malloc((m ? m : 1) * 2 * sizeof *o->kap);
-    if (!o->k || !o->P || !o->P_err || !o->modes || !o->kap) return LJGAP_ENOMEM;
+    size_t mm = m ? m : 1;
+    o->k = malloc(mm * sizeof *o->k);
+    o->P = malloc(mm * sizeof *o->P);
+    o->P_err = malloc(mm * sizeof *o->P_err);
+    o->modes = malloc(mm * sizeof *o->modes);
+    o->kap = malloc(mm * 2 * sizeof *o->kap);
+    o->lo = malloc(mm * sizeof *o->lo);
+    o->hi = malloc(mm * sizeof *o->hi);
+    o->var = malloc(mm * sizeof *o->var);
+    if (!o->k || !o->P || !o->P_err || !o->modes || !o->kap || !o->lo || !o->hi || !o->var)
+        return LJGAP_ENOMEM;
+    double cells = 1; /* the zero mode */
     for (size_t i = 0; i < b->nb; i++) {
         double c = b->cnt[i];
         if (!(c > 0)) continue;
@@ -349,19 +441,76 @@ static int binner_out(const binner *b, bins *o)
         o->modes[o->n] = eff;
         o->kap[2 * o->n] = fmax(m2 - k1 * k1, 0);
         o->kap[2 * o->n + 1] = m3 - 3 * k1 * m2 + 2 * k1 * k1 * k1;
+        o->lo[o->n] = cells_edge(b, cells);
+        cells += c;
+        o->hi[o->n] = cells_edge(b, cells);
+        o->var[o->n] = b->sP[i] * b->cell;
+        /* the bin's k inside its band (the lattice's first rings are coarse) */
+        o->lo[o->n] = fmin(o->lo[o->n], o->k[o->n]);
+        o->hi[o->n] = fmax(o->hi[o->n], o->k[o->n]);
+        if (o->n > 0) o->lo[o->n] = fmax(o->lo[o->n], o->hi[o->n - 1]);
         o->n++;
     }
     return LJGAP_OK;
 }
 
-/* The curvature of a power law k^s inside a bin: the mean of k^s over the bin's modes is
+#define TOPO_SLOPE_MIN -10.0 /* bounds of the local slope the curvature correction uses */
+#define TOPO_SLOPE_MAX 2.0
+#define TOPO_SLOPE_REACH 2 /* the local slope: from windows of 2 × 2 + 1 bins */
+
+/* The weighted least-squares slope of ln P over the bins [a, b] (weights and digamma shift as
+ * in fit_power) and its χ² per degree of freedom (0 with two bins); -1 with fewer than 2. */
+static int slope_of(const double *k, const double *P, const double *modes, size_t a, size_t b,
+                    double *slope, double *chi2)
+{
+    double S = 0, Sx = 0, Sy = 0, Sxx = 0, Sxy = 0, Syy = 0;
+    size_t m = 0;
+    for (size_t j = a; j <= b; j++) {
+        if (!(P[j] > 0) || !(modes[j] > 0)) continue;
+        double w = 1 / gsl_sf_psi_1(modes[j]), x = log(k[j]);
+        double y = log(P[j]) - gsl_sf_psi(modes[j]) + log(modes[j]);
+        S += w, Sx += w * x, Sy += w * y, Sxx += w * x * x, Sxy += w * x * y, Syy += w * y * y;
+        m++;
+    }
+    double vx = Sxx - Sx * Sx / S, cxy = Sxy - Sx * Sy / S, vy = Syy - Sy * Sy / S;
+    if (m < 2 || !(vx > 1e-12 * Sxx)) return -1;
+    *slope = cxy / vx;
+    *chi2 = m > 2 ? fmax(vy - cxy * cxy / vx, 0) / (double)(m - 2) : 0;
+    return isfinite(*slope) ? 0 : -1;
+}
+
+/* The local slope of ln P at every bin (into s): of the windows of TOPO_SLOPE_REACH + 1 bins
+ * that hold bin i (i at their left end, centre or right end), the slope of the one that is
+ * most straight (least χ² per degree of freedom), so that a bin next to a cutoff or a corner
+ * takes its slope from its own side; within [TOPO_SLOPE_MIN, TOPO_SLOPE_MAX]. From the raw
+ * bins only: nothing fitted feeds back into it (a slope fitted across a roll-off once ran the
+ * correction away, issue 25). */
+static void local_slopes(const double *k, const double *P, const double *modes, size_t n, double *s)
+{
+    const size_t w = 2 * TOPO_SLOPE_REACH;
+    for (size_t i = 0; i < n; i++) {
+        double best = INFINITY, v = 0, sl, c2;
+        for (int side = 0; side < 3; side++) {
+            size_t a = side == 0   ? i
+                       : side == 1 ? (i >= w / 2 ? i - w / 2 : 0)
+                                   : (i >= w ? i - w : 0);
+            size_t b = a + w < n ? a + w : n - 1;
+            if (b <= a || slope_of(k, P, modes, a, b, &sl, &c2)) continue;
+            if (c2 < best) best = c2, v = sl;
+        }
+        s[i] = fmin(fmax(v, TOPO_SLOPE_MIN), TOPO_SLOPE_MAX);
+    }
+}
+
+/* The curvature of the spectrum inside a bin: the mean of k^s over the bin's modes is
  * k_g^s <e^{s x}>, x = ln(k/k_g) (k_g the geometric mean), ln <e^{s x}> = s²κ2/2 + s³κ3/6 + ...
- * (the cumulants of ln k). The bin's mean P, divided by that, is the law at k_g: P_true[b] =
- * P_raw[b] / exp(s²κ2/2 + s³κ3/6), with s the fitted slope (10 bins a decade, slope -3.4: 3 %). */
-static void bins_correct(const bins *o, double s, double *P, double *P_err)
+ * (the cumulants of ln k). The bin's mean P, divided by that, is the spectrum at k_g: P[b] =
+ * P_raw[b] / exp(s²κ2/2 + s³κ3/6), s the bin's local slope (10 bins a decade, slope -3.4: 3 %). */
+static void bins_correct(const bins *o, const double *s, double *P, double *P_err)
 {
     for (size_t i = 0; i < o->n; i++) {
-        double c = exp(-(s * s * o->kap[2 * i] / 2 + s * s * s * o->kap[2 * i + 1] / 6));
+        double si = s[i];
+        double c = exp(-(si * si * o->kap[2 * i] / 2 + si * si * si * o->kap[2 * i + 1] / 6));
         P[i] = o->P[i] * c;
         P_err[i] = o->P_err[i] * c;
     }
@@ -416,6 +565,117 @@ static int fit_power(const double *k, const double *P, const double *modes, doub
     f->kmax = khi;
     f->bins = m;
     f->chi2_red = chi2_red;
+    return 0;
+}
+
+/* The curvature of ln P in ln k over the bins [0, n): the weighted least-squares quadratic
+ * y = a + b x + c x² (x centred, weights as in fit_power); *c and its standard error *sc.
+ * -1 when fewer than 4 bins or a singular system. */
+static int fit_curvature(const double *k, const double *P, const double *modes, double var_extra,
+                         size_t n, double *c, double *sc)
+{
+    double S[5] = {0}, T[3] = {0}, xm = 0, W = 0;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (P[i] > 0 && modes[i] > 0) {
+            double w = 1 / (gsl_sf_psi_1(modes[i]) + var_extra);
+            W += w, xm += w * log(k[i]), m++;
+        }
+    if (m < 4 || !(W > 0)) return -1;
+    xm /= W;
+    for (size_t i = 0; i < n; i++) {
+        if (!(P[i] > 0) || !(modes[i] > 0)) continue;
+        double w = 1 / (gsl_sf_psi_1(modes[i]) + var_extra), x = log(k[i]) - xm;
+        double y = log(P[i]) - gsl_sf_psi(modes[i]) + log(modes[i]), xp = 1;
+        for (int p = 0; p < 5; p++, xp *= x) {
+            S[p] += w * xp;
+            if (p < 3) T[p] += w * xp * y;
+        }
+    }
+    /* normal equations [[S0 S1 S2] [S1 S2 S3] [S2 S3 S4]] (a b c) = T, by Cramer's rule */
+    double A[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
+    double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+                 A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                 A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    if (!(fabs(det) > 0) || !isfinite(det)) return -1;
+    double numc = A[0][0] * (A[1][1] * T[2] - T[1] * A[2][1]) -
+                  A[0][1] * (A[1][0] * T[2] - T[1] * A[2][0]) +
+                  T[0] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    double cof = A[0][0] * A[1][1] - A[0][1] * A[1][0]; /* (A⁻¹)_cc = cof / det */
+    *c = numc / det;
+    *sc = cof / det > 0 ? sqrt(cof / det) : INFINITY;
+    return 0;
+}
+
+#define TOPO_BAND_MIN 0.7 /* decades: the narrowest band the detection takes */
+#define TOPO_BAND_Z                                                                                \
+    2.0                     /* a band is a power law when χ²_red <= 1 + Z √(2/dof) and its     \
+                             * curvature in log-log is below Z standard errors */
+#define TOPO_BAND_EDGE 0.35 /* decades: the ends whose slope must agree with the band's */
+#define TOPO_BAND_SLOPE                                                                            \
+    -1.0 /* and it falls faster than k^-1 (D < 3.5): flat parts (roll-off,                         \
+          * white-noise floor) are no candidates */
+
+/* Is the window [a, b] a power law? Its fit into f (-1: no fit). */
+static int window_fit(const double *k, const double *P, const double *modes, double var_extra,
+                      size_t a, size_t b, double Z, ljgap_topo_fit *f, int *ok)
+{
+    double c, sc;
+    *ok = 0;
+    if (fit_power(k + a, P + a, modes + a, var_extra, b - a + 1, 0, INFINITY, f)) return -1;
+    double dof = (double)f->bins - 2;
+    int chi_ok = f->chi2_red <= 1 + Z * sqrt(2 / dof);
+    int curv_ok = fit_curvature(k + a, P + a, modes + a, var_extra, b - a + 1, &c, &sc) != 0 ||
+                  fabs(c) <= Z * sc;
+    /* the slope at either end (its last TOPO_BAND_EDGE decades) agrees with the band's: a
+     * floor or a roll-off bends the ends first, where a global test has little power */
+    int ends_ok = 1;
+    for (int end = 0; end < 2 && ends_ok; end++) {
+        size_t x = end ? b : a, y = x;
+        while (end ? (y > a && log10(k[b] / k[y - 1]) <= TOPO_BAND_EDGE)
+                   : (y < b && log10(k[y + 1] / k[a]) <= TOPO_BAND_EDGE))
+            y += end ? (size_t)-1 : 1;
+        size_t u = end ? y : x, v = end ? x : y;
+        ljgap_topo_fit g;
+        if (v < u + 2 || v - u + 1 >= f->bins) continue;
+        if (fit_power(k + u, P + u, modes + u, var_extra, v - u + 1, 0, INFINITY, &g)) continue;
+        ends_ok = fabs(g.D.value - f->D.value) <= Z * hypot(g.D.err, f->D.err);
+    }
+    *ok = chi_ok && curv_ok && ends_ok && 2 * f->D.value - 8 < TOPO_BAND_SLOPE;
+    return 0;
+}
+
+/* The power-law band among the bins [lo, hi] (fix_lo, fix_hi: that end is given and stays):
+ * of the windows of contiguous bins at least TOPO_BAND_MIN decades wide that are a power law
+ * (window_fit), the widest (then the one of least χ²_red). None: the same with bounds 1.5
+ * times wider (the fit is then not sound); still none: the fit over [lo, hi], not sound. f filled
+ * and 0, or -1 when [lo, hi] holds fewer than 3 bins. */
+static int fit_band(const double *k, const double *P, const double *modes, double var_extra,
+                    size_t lo, size_t hi, int fix_lo, int fix_hi, ljgap_topo_fit *f)
+{
+    ljgap_topo_fit t, best = {0};
+    double bw = -1, Z = TOPO_BAND_Z;
+    int ok;
+    if (hi < lo + 2) return -1;
+    /* the bounds at Z standard errors; when no window passes, at 1.5 Z (then not sound) */
+    for (int pass = 0; pass < 2 && bw < 0; pass++, Z *= 1.5)
+        for (size_t a = lo; a + 2 <= hi && (!fix_lo || a == lo); a++)
+            for (size_t b = hi; b >= a + 2 && (!fix_hi || b == hi); b--) {
+                double w = log10(k[b] / k[a]);
+                if (w < TOPO_BAND_MIN && !(a == lo && b == hi)) break; /* narrower from here */
+                if (window_fit(k, P, modes, var_extra, a, b, Z, &t, &ok) || !ok) continue;
+                t.sound = pass == 0;
+                if (bw < 0 || t.D.err < best.D.err) best = t, bw = w;
+            }
+    if (bw < 0) {
+        if (fit_power(k + lo, P + lo, modes + lo, var_extra, hi - lo + 1, 0, INFINITY, f))
+            return -1;
+        f->sound = 0;
+    } else {
+        *f = best;
+        f->sound = best.sound && best.D.value > 2 && best.D.value < 3;
+    }
+    f->given = fix_lo || fix_hi;
     return 0;
 }
 
@@ -532,6 +792,14 @@ static int check_input(const double *h, const ljgap_topo_grid *g, const ljgap_to
         ljgap_warn(w, "topography: bins_per_decade in [2, 100] and fit limits >= 0 are needed");
         return LJGAP_EINVAL;
     }
+    if (!(o->tip_radius >= 0) || !isfinite(o->tip_radius) || !(o->resolution >= 0) ||
+        !isfinite(o->resolution) || o->detrend < LJGAP_DETREND_AUTO ||
+        o->detrend > LJGAP_DETREND_CURVATURE ||
+        (o->fit_kmin > 0 && o->fit_kmax > 0 && !(o->fit_kmax > o->fit_kmin))) {
+        ljgap_warn(w, "topography: tip_radius and resolution >= 0, a known detrend and fit_kmax > "
+                      "fit_kmin are needed");
+        return LJGAP_EINVAL;
+    }
     for (size_t i = 0; i < nx * ny; i++)
         if (!isfinite(h[i])) {
             ljgap_warn(w, "topography: height %zu (row %zu, column %zu) is not finite", i, i / nx,
@@ -541,33 +809,27 @@ static int check_input(const double *h, const ljgap_topo_grid *g, const ljgap_to
     return LJGAP_OK;
 }
 
-/* The fit of the bins o with their curvature correction: fit the raw bins, correct them with
- * the fitted slope, fit again (twice: the correction moves the slope by about 1e-3). P and
- * P_err (o->n each) receive the corrected bins, or the raw ones when there is no fit (-1). */
-static int fit_corrected(const bins *o, double *P, double *P_err, double kmin, double kmax,
-                         ljgap_topo_fit *f)
+/* 2π ∫ k P dk over [x1, x2] of the power law P = Pa (k/ka)^s. */
+static double seg_var(double ka, double Pa, double s, double x1, double x2)
 {
-    memcpy(P, o->P, o->n * sizeof *P);
-    memcpy(P_err, o->P_err, o->n * sizeof *P_err);
-    if (fit_power(o->k, P, o->modes, 0, o->n, kmin, kmax, f)) return -1;
-    for (int it = 0; it < 2; it++) {
-        bins_correct(o, 2 * f->D.value - 8, P, P_err);
-        if (fit_power(o->k, P, o->modes, 0, o->n, kmin, kmax, f)) return -1;
-    }
-    return 0;
+    if (!(x2 > x1)) return 0;
+    double e = s + 2, a = log(x1 / ka), b = log(x2 / ka), t = e * (b - a);
+    double f = fabs(t) < 1e-12 ? b - a : expm1(t) / e;
+    return 2 * M_PI * Pa * ka * ka * exp(e * a) * f;
 }
 
-/* Profile: the 1-D bins (corrected, in r->PP) and their exponent alpha, then the isotropic PSD
- * F(alpha) PP/k in r->P. */
-static int profile_convert(const bins *o, ljgap_topo_result *r, double kmin, double kmax,
+/* The 2-D equivalent of a profile's bins: r->P = F(alpha) PP/k (alpha fitted to the PP bins
+ * of the band [lo, hi], detected unless fixed), errors with alpha's, the bins' variances
+ * 2π ∫ k P dk over their bands with the local slope. */
+static int profile_convert(ljgap_topo_result *r, size_t lo, size_t hi, int fix_lo, int fix_hi,
                            ljgap_warnings *w)
 {
     ljgap_topo_fit f1;
-    if (fit_corrected(o, r->PP, r->PP_err, kmin, kmax, &f1) != 0) {
+    if (fit_band(r->k, r->PP, r->modes, 0, lo, hi, fix_lo, fix_hi, &f1) != 0) {
         ljgap_warn(w,
                    "topography: the profile has fewer than 3 bins in the band [%g, %g] to "
                    "fit the exponent that converts it to the isotropic PSD",
-                   kmin, kmax);
+                   r->k[lo < r->n ? lo : 0], r->k[hi < r->n ? hi : r->n - 1]);
         return LJGAP_EINVAL;
     }
     /* PP ∝ k^(2 D1 - 8) in the fit's terms: alpha = 8 - 2 D1 */
@@ -586,8 +848,78 @@ static int profile_convert(const bins *o, ljgap_topo_result *r, double kmin, dou
         double rel = r->PP_err[i] / r->PP[i];
         r->P[i] = F * r->PP[i] / r->k[i];
         r->P_err[i] = r->P[i] * sqrt(rel * rel + eF * eF);
+        r->slope[i] -= 1; /* of P = F PP / k */
+        r->var[i] = seg_var(r->k[i], r->P[i], r->slope[i], r->lo[i], r->hi[i]);
     }
     return LJGAP_OK;
+}
+
+#define TOPO_TIP_CURV                                                                              \
+    0.1                   /* the tip's limit: where the rms curvature at scale λ reaches this     \
+                           * fraction of the tip's 1/R (calibrated, docs/topography.md) */
+#define TOPO_TIP_STEPS 40 /* wavenumbers a decade searched for the tip's limit */
+
+/* The tip's limit (docs/topography.md, after Sanner et al. 2022): the curvature of the surface
+ * at scale λ, the second difference κ_λ = (h(x + λ) - 2h(x) + h(x - λ))/λ² along a direction,
+ * has for an isotropic surface the variance
+ *     σκ²(λ) = (16/λ⁴) ∫∫ P sin⁴(qx λ/2) d²q = (16/λ⁴) Σ_b var_b g(k_b λ/2),
+ *     g(a) = <sin⁴(a cos θ)>_θ = 3/8 - J0(2a)/2 + J0(4a)/8.
+ * A tip of radius R follows the surface where the curvature of its valleys stays below 1/R;
+ * the data at wavenumber k = π/λ (the second difference's peak) are unreliable from the lowest
+ * k at which σκ(π/k) > TOPO_TIP_CURV/R on. INFINITY when that does not happen up to k_nyq. */
+static double tip_limit(const ljgap_topo_result *r, double R)
+{
+    if (!(R > 0) || r->n == 0) return INFINITY;
+    double steps = TOPO_TIP_STEPS * log10(r->k_nyq / r->k_fund), lim = TOPO_TIP_CURV / R;
+    for (double t = 0; t <= steps + 1e-9; t++) {
+        double k = r->k_fund * pow(10, t / TOPO_TIP_STEPS), lam = M_PI / k, s2 = 0;
+        for (size_t b = 0; b < r->n; b++) {
+            double a = 0.5 * r->k[b] * lam;
+            s2 += r->var[b] *
+                  (0.375 - 0.5 * gsl_sf_bessel_J0(2 * a) + 0.125 * gsl_sf_bessel_J0(4 * a));
+        }
+        if (sqrt(16 * s2) / (lam * lam) > lim) return k;
+    }
+    return INFINITY;
+}
+
+/* The reliable band and its bins (r->rel_*). */
+static void reliable_band(ljgap_topo_result *r, const ljgap_topo_opts *o)
+{
+    double kres = o->resolution > 0 ? M_PI / o->resolution : INFINITY;
+    r->k_tip = tip_limit(r, o->tip_radius);
+    r->rel_kmax = r->k_nyq, r->rel_by = LJGAP_RELIABLE_NYQUIST;
+    if (r->k_tip < r->rel_kmax) r->rel_kmax = r->k_tip, r->rel_by = LJGAP_RELIABLE_TIP;
+    if (kres < r->rel_kmax) r->rel_kmax = kres, r->rel_by = LJGAP_RELIABLE_RESOLUTION;
+    double kmin = r->k_fund * (r->periodic ? 1 : TOPO_FIT_WINDOWED);
+    size_t a = 0, b = r->n;
+    while (a < r->n && r->k[a] < kmin * (1 - 1e-9))
+        a++;
+    while (b > 0 && r->k[b - 1] > r->rel_kmax * (1 + 1e-9))
+        b--;
+    r->rel_first = a;
+    r->rel_last = b > 0 ? b - 1 : 0;
+    r->rel_kmin = a < r->n ? r->lo[a] : kmin;
+}
+
+/* The fit: its band detected inside the reliable bins, or given (either end). */
+static int fit_spectrum(ljgap_topo_result *r, const ljgap_topo_opts *o, double var_extra,
+                        const double *P, int profile_pp, ljgap_warnings *w)
+{
+    size_t lo = r->rel_first, hi = r->rel_last;
+    int fix_lo = o->fit_kmin > 0, fix_hi = o->fit_kmax > 0;
+    if (fix_lo) {
+        for (lo = 0; lo < r->n && r->k[lo] < o->fit_kmin * (1 - 1e-9); lo++)
+            ;
+    }
+    if (fix_hi) {
+        for (hi = r->n; hi > 0 && r->k[hi - 1] > o->fit_kmax * (1 + 1e-9); hi--)
+            ;
+        hi = hi > 0 ? hi - 1 : 0;
+    }
+    if (r->n == 0 || lo >= r->n || hi < lo + 2) return -1;
+    if (profile_pp) return profile_convert(r, lo, hi, fix_lo, fix_hi, w) ? -2 : 0;
+    return fit_band(r->k, P, r->modes, var_extra, lo, hi, fix_lo, fix_hi, &r->fit);
 }
 
 int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_topo_opts *o,
@@ -610,6 +942,10 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
     const double d = nx > 1 ? g->dx : g->dy;
     res->profile = profile;
     res->periodic = g->periodic != 0;
+    res->detrend = o->detrend != LJGAP_DETREND_AUTO ? o->detrend
+                   : g->periodic                    ? LJGAP_DETREND_MEAN
+                                                    : LJGAP_DETREND_PLANE;
+    if (profile && res->detrend == LJGAP_DETREND_LINES) res->detrend = LJGAP_DETREND_PLANE;
     if (profile) {
         res->k_fund = 2 * M_PI / ((double)n * d);
         res->k_nyq = M_PI / d;
@@ -635,16 +971,19 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
         goto end;
     }
     if (profile)
-        detrend(a, n, 1, !g->periodic);
+        detrend(a, n, 1, res->detrend);
     else
-        detrend(a, nx, ny, !g->periodic);
+        detrend(a, nx, ny, res->detrend);
     double ss = 0;
     for (size_t i = 0; i < N; i++)
         ss += a[i] * a[i];
     res->h_rms.value = sqrt(ss / (double)N);
     if (!(res->h_rms.value > 64 * DBL_EPSILON * scale) || !isfinite(res->h_rms.value)) {
-        ljgap_warn(w, "topography: nothing is left after removing the mean and the plane: the "
-                      "heights lie on a plane (to round-off)");
+        ljgap_warn(w,
+                   "topography: nothing is left after removing the %s: the heights lie on %s "
+                   "(to round-off)",
+                   ljgap_topo_detrend_name(res->detrend),
+                   res->detrend == LJGAP_DETREND_MEAN ? "a constant" : "that");
         st = LJGAP_EINVAL;
         goto end;
     }
@@ -656,6 +995,9 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
     }
     if ((st = binner_alloc(&b, res->k_fund, res->k_nyq, o->bins_per_decade, !g->periodic)))
         goto end;
+    b.line = profile;
+    b.cell = profile ? 2 * M_PI / ((double)n * d)
+                     : 4 * M_PI * M_PI / ((double)nx * g->dx * (double)ny * g->dy);
     st = profile ? profile_spectrum(a, n, d, &b, &mo)
                  : map_spectrum(a, nx, ny, g->dx, g->dy, &b, &mo);
     if (st) goto end;
@@ -666,34 +1008,60 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
     const double vif = g->periodic ? 1 : pow(TOPO_HANN_VIF, profile ? 1 : 2);
     if ((st = binner_out(&b, &o1))) goto end;
     res->n = o1.n;
-    res->k = o1.k, res->modes = o1.modes; /* the result owns them now */
-    o1.k = o1.modes = NULL;
-    res->P = malloc((res->n ? res->n : 1) * sizeof *res->P);
-    res->P_err = malloc((res->n ? res->n : 1) * sizeof *res->P_err);
+    /* the result owns them now */
+    res->k = o1.k, res->modes = o1.modes, res->lo = o1.lo, res->hi = o1.hi, res->var = o1.var;
+    o1.k = o1.modes = o1.lo = o1.hi = o1.var = NULL;
+    size_t nn = res->n ? res->n : 1;
+    res->P = malloc(nn * sizeof *res->P);
+    res->P_err = malloc(nn * sizeof *res->P_err);
+    res->slope = malloc(nn * sizeof *res->slope);
     if (profile) {
-        res->PP = malloc((res->n ? res->n : 1) * sizeof *res->PP);
-        res->PP_err = malloc((res->n ? res->n : 1) * sizeof *res->PP_err);
+        res->PP = malloc(nn * sizeof *res->PP);
+        res->PP_err = malloc(nn * sizeof *res->PP_err);
     }
-    if (!res->P || !res->P_err || (profile && (!res->PP || !res->PP_err))) {
+    if (!res->P || !res->P_err || !res->slope || (profile && (!res->PP || !res->PP_err))) {
         st = LJGAP_ENOMEM;
         goto end;
     }
     o1.k = res->k, o1.modes = res->modes; /* read below, freed with res */
-    double kmin =
-        o->fit_kmin > 0 ? o->fit_kmin : res->k_fund * (g->periodic ? 1 : TOPO_FIT_WINDOWED);
-    double kmax = o->fit_kmax > 0 ? o->fit_kmax : res->k_nyq;
+    local_slopes(res->k, o1.P, res->modes, res->n, res->slope);
+    bins_correct(&o1, res->slope, profile ? res->PP : res->P, profile ? res->PP_err : res->P_err);
+    int ft;
     if (profile) {
-        if ((st = profile_convert(&o1, res, kmin, kmax, w))) goto end;
+        /* the band for alpha: the reliable band of the PP bins (the tip's limit needs the
+         * converted variances: a first conversion over the whole band, then the real one) */
+        ljgap_topo_opts o0 = *o;
+        o0.tip_radius = 0;
+        reliable_band(res, &o0);
+        if ((ft = fit_spectrum(res, &o0, 0, res->PP, 1, w)) == -2) {
+            st = LJGAP_EINVAL;
+            goto end;
+        }
+        if (o->tip_radius > 0 || o->resolution > 0) {
+            reliable_band(res, o);
+            local_slopes(res->k, o1.P, res->modes, res->n, res->slope);
+            if ((ft = fit_spectrum(res, o, 0, res->PP, 1, w)) == -2) {
+                st = LJGAP_EINVAL;
+                goto end;
+            }
+        }
         double eF = fabs(abel_dlog(res->alpha.value)) * res->alpha.err;
-        res->has_fit =
-            fit_power(res->k, res->P, res->modes, eF * eF, res->n, kmin, kmax, &res->fit) == 0;
+        ft = ft == 0 ? fit_spectrum(res, o, eF * eF, res->P, 0, w) : ft;
     } else {
-        res->has_fit = fit_corrected(&o1, res->P, res->P_err, kmin, kmax, &res->fit) == 0;
+        reliable_band(res, o);
+        ft = fit_spectrum(res, o, 0, res->P, 0, w);
     }
+    res->has_fit = ft == 0;
     if (!res->has_fit)
+        ljgap_warn(w, "topography: fewer than 3 bins lie in the fit band: no power-law fit");
+    else if (!res->fit.sound)
         ljgap_warn(w,
-                   "topography: fewer than 3 bins lie in the fit band [%g, %g]: no power-law fit",
-                   kmin, kmax);
+                   "topography: %s (D = %.3g, χ²_red = %.3g over k = %g to %g): no power-law "
+                   "tail is attached",
+                   res->fit.D.value > 2 && res->fit.D.value < 3
+                       ? "the spectrum is no power law in any band of the reliable data"
+                       : "the fitted fractal dimension lies outside (2, 3)",
+                   res->fit.D.value, res->fit.chi2_red, res->fit.kmin, res->fit.kmax);
     /* moments: a profile's m2 is <h'²>; an isotropic surface has <|∇h|²> = 2 <h'²> */
     double f2 = profile ? 2 : 1, v = vif;
     res->m0_spectrum = mo.m0;
@@ -704,8 +1072,8 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
     int finite = isfinite(res->h_rms.err) && isfinite(res->rms_slope.value) &&
                  isfinite(res->rms_slope.err) && isfinite(res->m0_spectrum);
     for (size_t i = 0; finite && i < res->n; i++)
-        finite =
-            isfinite(res->k[i]) && isfinite(res->P[i]) && isfinite(res->P_err[i]) && res->P[i] > 0;
+        finite = isfinite(res->k[i]) && isfinite(res->P[i]) && isfinite(res->P_err[i]) &&
+                 res->P[i] > 0 && isfinite(res->var[i]);
     if (res->has_fit)
         finite = finite && isfinite(res->fit.D.value) && isfinite(res->fit.D.err) &&
                  isfinite(res->fit.C.value) && isfinite(res->fit.C.err) &&
@@ -724,33 +1092,116 @@ end:
     return st;
 }
 
-int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double **k, double **P, size_t *n)
+/* ---- the psd object's table ---- */
+
+void ljgap_topo_tab_free(ljgap_topo_tab *t)
 {
-    size_t first = 0, m;
-    *k = *P = NULL;
-    *n = 0;
-    while (first < r->n && r->k[first] <= k_from)
+    if (!t) return;
+    free(t->k);
+    free(t->P);
+    free(t->P_err);
+    memset(t, 0, sizeof *t);
+}
+
+/* 2π ∫ k P dk over [x1, x2] of the table's log-log interpolation (knots K, log values V). */
+static double tab_int(const double *K, const double *V, size_t m, double x1, double x2)
+{
+    double sum = 0;
+    for (size_t j = 0; j + 1 < m; j++) {
+        double a = fmax(x1, K[j]), b = fmin(x2, K[j + 1]);
+        if (!(b > a)) continue;
+        double s = (V[j + 1] - V[j]) / log(K[j + 1] / K[j]);
+        sum += seg_var(K[j], exp(V[j]), s, a, b);
+    }
+    return sum;
+}
+
+#define TOPO_TAB_ITER                                                                              \
+    500 /* iterations of the table's values (each divides the misfit by 2 or more) */
+
+int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double tail_q, ljgap_topo_tab *t)
+{
+    memset(t, 0, sizeof *t);
+    if (!r || r->n == 0 || r->rel_last < r->rel_first || r->rel_last >= r->n) return LJGAP_EINVAL;
+    size_t first = r->rel_first, last = r->rel_last;
+    while (first <= last && r->hi[first] <= k_from * (1 + 1e-12))
         first++;
-    int lead = first > 0 && first < r->n; /* k_from inside the band: interpolate there */
-    m = r->n - first + (size_t)lead;
-    if (m < 2) return LJGAP_EINVAL;
-    *k = malloc(m * sizeof **k);
-    *P = malloc(m * sizeof **P);
-    if (!*k || !*P) {
-        free(*k);
-        free(*P);
-        *k = *P = NULL;
-        return LJGAP_ENOMEM;
+    if (first > last) return LJGAP_EINVAL;
+    const size_t nb = last - first + 1;
+    double lo0 = fmax(r->lo[first], k_from), hiN = fmin(r->hi[last], r->rel_kmax);
+    if (!(hiN > lo0)) return LJGAP_EINVAL;
+    /* knots: [lo0,] c_first ... c_last [, hiN]; c_b the bin's k inside its band */
+    size_t m = nb + 2, lead, idx0;
+    double *K = malloc(m * sizeof *K), *V = malloc(m * sizeof *V), *S = malloc(nb * sizeof *S);
+    double *blo = calloc(nb, sizeof *blo), *bhi = calloc(nb, sizeof *bhi);
+    double *dv = malloc(nb * sizeof *dv);
+    int st = LJGAP_ENOMEM;
+    if (!K || !V || !S || !blo || !bhi || !dv) goto end;
+    for (size_t b = 0; b < nb; b++) {
+        size_t i = first + b;
+        blo[b] = b == 0 ? lo0 : r->lo[i];
+        bhi[b] = b + 1 == nb ? hiN : r->hi[i];
+        S[b] = r->var[i];
+        if (b == 0 && lo0 > r->lo[i]) /* the share of the bin above k_from, by its local slope */
+            S[b] *= seg_var(r->k[i], 1, r->slope[i], lo0, r->hi[i]) /
+                    seg_var(r->k[i], 1, r->slope[i], r->lo[i], r->hi[i]);
     }
-    if (lead) {
-        size_t i = first - 1;
-        double t = log(k_from / r->k[i]) / log(r->k[i + 1] / r->k[i]);
-        (*k)[0] = k_from;
-        (*P)[0] = exp(log(r->P[i]) + t * log(r->P[i + 1] / r->P[i]));
-        if (r->k[i] == k_from) (*P)[0] = r->P[i];
+    double c0 = fmin(fmax(r->k[first], blo[0]), bhi[0]);
+    lead = lo0 < c0 * (1 - 1e-12);
+    idx0 = lead;
+    if (lead) K[0] = lo0;
+    for (size_t b = 0; b < nb; b++) {
+        double c = fmin(fmax(r->k[first + b], blo[b]), bhi[b]);
+        if (idx0 + b > 0 && !(c > K[idx0 + b - 1])) c = K[idx0 + b - 1] * (1 + 1e-9);
+        K[idx0 + b] = c;
+        V[idx0 + b] = log(r->P[first + b]);
     }
-    memcpy(*k + lead, r->k + first, (r->n - first) * sizeof **k);
-    memcpy(*P + lead, r->P + first, (r->n - first) * sizeof **P);
-    *n = m;
-    return LJGAP_OK;
+    size_t mm = idx0 + nb;
+    int trail = hiN > K[mm - 1] * (1 + 1e-12);
+    double s_end = isfinite(tail_q) ? tail_q : fmin(fmax(r->slope[last], TOPO_SLOPE_MIN), 0);
+    if (trail) K[mm++] = hiN;
+    if (mm < 2) {
+        st = LJGAP_EINVAL;
+        goto end;
+    }
+    for (int it = 0; it < TOPO_TAB_ITER; it++) {
+        double worst = 0;
+        if (lead) V[0] = V[1];
+        if (trail) V[mm - 1] = V[mm - 2] + s_end * log(K[mm - 1] / K[mm - 2]);
+        for (size_t b = 0; b < nb; b++) { /* Jacobi: every bin from the same values */
+            double I = tab_int(K, V, mm, blo[b], bhi[b]);
+            dv[b] = S[b] > 0 && I > 0 ? log(S[b] / I) : 0;
+            worst = fmax(worst, fabs(dv[b]));
+        }
+        for (size_t b = 0; b < nb; b++)
+            V[idx0 + b] += dv[b];
+        if (worst < 1e-12) break;
+    }
+    if (lead) V[0] = V[1];
+    if (trail) V[mm - 1] = V[mm - 2] + s_end * log(K[mm - 1] / K[mm - 2]);
+    t->k = malloc(mm * sizeof *t->k);
+    t->P = malloc(mm * sizeof *t->P);
+    t->P_err = malloc(mm * sizeof *t->P_err);
+    if (!t->k || !t->P || !t->P_err) goto end;
+    for (size_t j = 0; j < mm; j++) {
+        size_t b = j < idx0 ? 0 : j - idx0 >= nb ? nb - 1 : j - idx0, i = first + b;
+        t->k[j] = K[j];
+        t->P[j] = exp(V[j]);
+        t->P_err[j] = t->P[j] * r->P_err[i] / r->P[i];
+    }
+    t->n = mm;
+    t->m0 = tab_int(K, V, mm, K[0], K[mm - 1]);
+    t->m0_modes = 0;
+    for (size_t b = 0; b < nb; b++)
+        t->m0_modes += S[b];
+    st = LJGAP_OK;
+end:
+    free(K);
+    free(V);
+    free(S);
+    free(blo);
+    free(bhi);
+    free(dv);
+    if (st) ljgap_topo_tab_free(t);
+    return st;
 }

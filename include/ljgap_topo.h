@@ -37,11 +37,29 @@ typedef struct {
     int periodic; /* 1: one period of a periodic surface: mean removed, no plane, no window */
 } ljgap_topo_grid;
 
+/* What is removed from the map before its transform. */
+typedef enum {
+    LJGAP_DETREND_AUTO = 0, /* mean for a periodic map, plane for a non-periodic one */
+    LJGAP_DETREND_MEAN,     /* the mean only */
+    LJGAP_DETREND_PLANE,    /* the least-squares plane (a line for a profile) */
+    LJGAP_DETREND_LINES,    /* each row's (scan line's) own least-squares line */
+    LJGAP_DETREND_CURVATURE /* the least-squares quadratic surface (parabola for a profile) */
+} ljgap_topo_detrend;
+
+/* What limits the reliable band from above. */
+typedef enum {
+    LJGAP_RELIABLE_NYQUIST = 0,
+    LJGAP_RELIABLE_TIP,
+    LJGAP_RELIABLE_RESOLUTION
+} ljgap_topo_by;
+
 typedef struct {
     double bins_per_decade;     /* logarithmic bins of |k| per decade (10), in [2, 100] */
-    double fit_kmin;            /* lowest bin k fitted; 0: automatic (the fundamental 2π/L for
-                                 * a periodic map, 4 × it for a windowed one) */
-    double fit_kmax;            /* highest bin k fitted; 0: automatic (the Nyquist limit) */
+    double fit_kmin;            /* lowest bin k fitted; 0: detected (the power-law band) */
+    double fit_kmax;            /* highest bin k fitted; 0: detected */
+    ljgap_topo_detrend detrend; /* LJGAP_DETREND_AUTO by default */
+    double tip_radius;          /* radius of the probe's tip (length unit); 0: not known */
+    double resolution;          /* lateral resolution of the instrument; 0: not known */
     const volatile int *cancel; /* optional: LJGAP_ECANCEL when *cancel becomes nonzero */
 } ljgap_topo_opts;
 
@@ -57,6 +75,9 @@ typedef struct {
     size_t bins;     /* bins used (>= 3) */
     double chi2_red; /* χ² per degree of freedom against the bins' errors; the errors of D
                       * and C are scaled up by √chi2_red when it exceeds 1 (misfit) */
+    int given;       /* 1: the band (or one of its ends) was given in the options */
+    int sound;       /* 1: the bins in the band are a power law (χ²_red and curvature within
+                      * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
 } ljgap_topo_fit;
 
 typedef struct {
@@ -65,6 +86,12 @@ typedef struct {
     double *P;     /* owned: isotropic 2-D PSD (mean periodogram of the bin) */
     double *P_err; /* owned: standard error of P (see core/topo.c: modes and window) */
     double *modes; /* owned: independent modes behind each bin (window-corrected) */
+    double *lo;    /* owned: lower edge of the band the bin's modes cover (the lattice's count
+                    * of cells: π lo² = cells below the bin, a profile 2 lo = cells × Δk) */
+    double *hi;    /* owned: its upper edge (the next bin's lo) */
+    double *var;   /* owned: the variance the bin's modes carry, Σ P Δq² (a profile: its 2-D
+                    * equivalent 2π ∫ k P dk of the converted bin over [lo, hi]) */
+    double *slope; /* owned: the local slope d ln P / d ln k the bin's curvature correction used */
     /* profiles only (NULL for a map): the 1-D PSD PP the bins were converted from */
     double *PP;      /* owned: mean two-sided 1-D periodogram of the bin */
     double *PP_err;  /* owned: its standard error */
@@ -81,7 +108,21 @@ typedef struct {
                          * periodic map, to round-off; windowed: close to it) */
     int has_fit;        /* 0 when fewer than 3 bins lie in the fit band */
     ljgap_topo_fit fit;
+    ljgap_topo_detrend detrend; /* what was removed (never AUTO) */
+    double rel_kmin;            /* the reliable band: from the lower edge of its first bin */
+    double rel_kmax;            /* to min(k_nyq, the tip's limit, π/resolution) */
+    ljgap_topo_by rel_by;       /* which of the three is rel_kmax */
+    double k_tip;               /* the tip's limit (INFINITY without a tip radius) */
+    size_t rel_first, rel_last; /* the bins inside the reliable band: [rel_first, rel_last] */
 } ljgap_topo_result;
+
+/* The psd object's table (ljgap_topo_table). */
+typedef struct {
+    size_t n;
+    double *k, *P, *P_err; /* owned, n each */
+    double m0;             /* 2π ∫ k P dk of the table's log-log interpolation (no tail) */
+    double m0_modes;       /* the variance of the modes the table stands for (Σ of var[]) */
+} ljgap_topo_tab;
 
 /* The isotropic PSD of the map h (grid g). Returns LJGAP_OK; LJGAP_EINVAL with a warning for a
  * bad grid (fewer than LJGAP_TOPO_MIN_SIDE points a side, dx or dy not positive and finite),
@@ -92,11 +133,20 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
                        ljgap_topo_result *res, ljgap_warnings *w);
 void ljgap_topo_result_free(ljgap_topo_result *res); /* NULL is fine */
 
-/* The bins from k_from on as a table (k, P), ready for ljgap_psd_table: the bins above k_from,
- * preceded by the log-log interpolation at k_from when k_from lies inside the binned band
- * (k_from <= k[0] takes every bin). *k and *P are malloc'd (*n >= 2 entries) and the caller's.
- * LJGAP_EINVAL when fewer than two points remain (k_from beyond the last bin but one). */
-int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double **k, double **P, size_t *n);
+/* The reliable bins from k_from on as a table (k, P, P_err), ready for ljgap_psd_table, whose
+ * log-log interpolation carries the variance of the modes it stands for: knots at the lower
+ * edge of the first bin (or k_from), at each bin's k and at the upper edge of the last, their
+ * values solved so that 2π ∫ k P dk over each bin's band [lo, hi] equals the bin's var (the
+ * bin cut at k_from keeps its share). tail_q (NAN: none) sets the last segment's slope so that
+ * a tail P ∝ k^tail_q continues it. t's arrays are the caller's (ljgap_topo_tab_free).
+ * LJGAP_EINVAL when no reliable bin reaches beyond k_from; LJGAP_ENOMEM. */
+int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double tail_q, ljgap_topo_tab *t);
+void ljgap_topo_tab_free(ljgap_topo_tab *t);
+
+/* The name of a detrend mode ("mean", "plane", "lines", "curvature"; "auto") and back (-1 for
+ * an unknown name). */
+const char *ljgap_topo_detrend_name(ljgap_topo_detrend d);
+int ljgap_topo_detrend_parse(const char *name);
 
 /* The profile conversion factor: P(k) = ljgap_topo_abel_factor(alpha) PP(k) / k, exact for
  * PP ∝ k^-alpha, alpha > 0 (Γ((alpha+1)/2) / (√π Γ(alpha/2))). */

@@ -623,15 +623,36 @@ static size_t topo_cap(void)
                                                : LJGAP_TOPO_POINTS_DEFAULT);
 }
 
-/* The psd object for /v1/adhesion with "units":"SI": the bins from k_from on with the fitted
- * power law as the tail; the fitted power law itself from k_from when fewer than two bins lie
- * beyond it; null (and a warning) when neither can be formed. Its variance into *m0 (m², NAN
- * when null). */
+/* Does the fit stand for the spectrum up to the table's end, soundly, with an exponent below
+ * -2? Then the tail continues it. Up to the end: every reliable bin above the fit's band lies
+ * within TAIL_BINS_SIGMA errors (and TAIL_BINS_REL) of the fitted law, so that a cutoff, a noise
+ * floor or the tip's trace above the band stops the tail while a band that merely stops a bin
+ * or two short of the end does not. */
+#define TAIL_BINS_SIGMA 3
+#define TAIL_BINS_REL 0.1
+static int fit_gives_tail(const ljgap_topo_result *r)
+{
+    if (!r->has_fit || !r->fit.sound || !(2 * r->fit.D.value - 8 < -2)) return 0;
+    for (size_t i = r->rel_first; i <= r->rel_last && i < r->n; i++) {
+        if (r->k[i] <= r->fit.kmax * (1 + 1e-9)) continue;
+        double law = r->fit.C.value * pow(r->k[i], 2 * r->fit.D.value - 8);
+        if (!(fabs(log(r->P[i] / law)) <= TAIL_BINS_SIGMA * r->P_err[i] / r->P[i] + TAIL_BINS_REL))
+            return 0;
+    }
+    return 1;
+}
+
+/* The psd object for /v1/adhesion with "units":"SI": the reliable bins from k_from on as a
+ * table that keeps their variance (ljgap_topo_table), with P_err and the fitted power law as
+ * the tail when fit_gives_tail; the fitted power law itself from k_from when no reliable bin
+ * reaches beyond it; null (and a warning) when neither can be formed. Its variance into *m0
+ * (m², NAN when null). */
 static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, double *m0)
 {
-    double *k = NULL, *P = NULL, q = 2 * r->fit.D.value - 8;
-    size_t n = 0;
-    int tail = r->has_fit && q < -2, st = ljgap_topo_table(r, k_from, &k, &P, &n);
+    double q = 2 * r->fit.D.value - 8;
+    int tail = fit_gives_tail(r);
+    ljgap_topo_tab t;
+    int st = ljgap_topo_table(r, k_from, tail ? q : NAN, &t);
     cJSON *o;
     ljgap_psd psd;
     *m0 = NAN;
@@ -642,26 +663,32 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
     if (st == LJGAP_OK) {
         o = put(j, j->ans, "psd", cJSON_CreateObject());
         put(j, o, "kind", cJSON_CreateString("table"));
-        put_nums(j, o, "k", k, n, sizeof *k, "psd.k");
-        put_nums(j, o, "P", P, n, sizeof *P, "psd.P");
-        if (tail)
-            put_num(j, put(j, o, "tail", cJSON_CreateObject()), "exponent", q, "psd.tail", -1);
-        else
-            ljgap_warn(&j->rq.warn,
-                       "the psd object has no tail: %s, so the table ends at k = %g 1/m",
-                       r->has_fit ? "the fitted exponent 2D - 8 is not below -2 (D >= 3)"
-                                  : "there is no power-law fit",
-                       k[n - 1]);
-        if (ljgap_psd_table(&psd, k, P, n, tail, q) == LJGAP_OK) *m0 = psd.m0;
+        put_nums(j, o, "k", t.k, t.n, sizeof *t.k, "psd.k");
+        put_nums(j, o, "P", t.P, t.n, sizeof *t.P, "psd.P");
+        put_nums(j, o, "P_err", t.P_err, t.n, sizeof *t.P_err, "psd.P_err");
+        if (tail) {
+            cJSON *to = put(j, o, "tail", cJSON_CreateObject());
+            put_num(j, to, "exponent", q, "psd.tail", -1);
+            put_num(j, to, "exponent_err", 2 * r->fit.D.err, "psd.tail.exponent_err", -1);
+        } else {
+            ljgap_warn(
+                &j->rq.warn, "the psd object has no tail: %s, so the table ends at k = %g 1/m",
+                !r->has_fit     ? "there is no power-law fit"
+                : !r->fit.sound ? "the fit is no sound power law with 2 < D < 3"
+                                : "the bins above the fit band are no power law (a cutoff, a noise "
+                                  "floor or the tip's trace?) and are kept as measured",
+                t.k[t.n - 1]);
+        }
+        if (ljgap_psd_table(&psd, t.k, t.P, t.n, tail, q) == LJGAP_OK) *m0 = psd.m0;
         ljgap_psd_free(&psd);
-    } else if (r->has_fit && r->fit.D.value > 2 && tail) {
+    } else if (r->has_fit && r->fit.sound && q < -2) {
         o = put(j, j->ans, "psd", cJSON_CreateObject());
         put(j, o, "kind", cJSON_CreateString("power"));
         put_num(j, o, "D", r->fit.D.value, "psd.D", -1);
         put_num(j, o, "k1", k_from, "psd.k1", -1);
         put_num(j, o, "C", r->fit.C.value, "psd.C", -1);
         ljgap_warn(&j->rq.warn,
-                   "the theory's band starts at k1 = %g 1/m, beyond the measured bins: the psd "
+                   "the theory's band starts at k1 = %g 1/m, beyond the reliable bins: the psd "
                    "object is the fitted power law, extrapolated",
                    k_from);
         if (ljgap_psd_power(&psd, r->fit.D.value, k_from, INFINITY, LJGAP_LEVEL_C,
@@ -670,21 +697,21 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
     } else {
         put(j, j->ans, "psd", cJSON_CreateNull());
         ljgap_warn(&j->rq.warn,
-                   "no psd object: fewer than two bins lie above k = %g 1/m and the "
-                   "fit gives no power law with 2 < D < 3 to extrapolate",
+                   "no psd object: no reliable bin lies above k = %g 1/m and the "
+                   "fit gives no sound power law with 2 < D < 3 to extrapolate",
                    k_from);
     }
-    free(k);
-    free(P);
+    ljgap_topo_tab_free(&t);
 }
 
-/* With a material: where the measured band lies against the theory's k > k0/χ, the k1 it
- * proposes (the first bin, or K1_MARGIN k0/χ when that is higher) and the psd object from
- * there. */
+/* With a material: where the reliable band lies against the theory's k > k0/χ, the k1 it
+ * proposes (the band's lower edge, or K1_MARGIN k0/χ when that is higher) and the psd object
+ * from there. */
 static void put_domain(job *j, const ljgap_topo_result *r)
 {
     const ljgap_material *m = &j->rq.mat;
-    double chi = ljgap_units_chi(m), kd = ljgap_k0() / chi, kf = r->k[0], kl = r->k[r->n - 1];
+    double chi = ljgap_units_chi(m), kd = ljgap_k0() / chi, kf = r->rel_kmin;
+    double kl = r->k[r->rel_last];
     double k1 = fmax(kf, K1_MARGIN * kd), m0;
     double inside = kl <= kd ? 0 : kf > kd ? 1 : log(kl / kd) / log(kl / kf);
     cJSON *d = put(j, j->ans, "domain", cJSON_CreateObject());
@@ -704,7 +731,7 @@ static void put_domain(job *j, const ljgap_topo_result *r)
     }
     if (inside < 1)
         ljgap_warn(&j->rq.warn,
-                   "%s of the measured band (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
+                   "%s of the reliable band (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
                    "outside the theory's domain: the psd object starts at k1 = %g 1/m",
                    inside == 0 ? "all" : "part", kf, kl, kd, k1);
 }
@@ -715,11 +742,16 @@ static int run_psd(job *j)
     ljgap_topo_grid g = {t->nx, t->ny, t->dx, t->dy, t->periodic};
     ljgap_topo_opts o;
     ljgap_topo_result r;
-    cJSON *err, *grid, *fit, *efit, *pr;
+    cJSON *err, *grid, *fit, *efit, *pr, *rel;
     double m0;
     int st;
     ljgap_topo_opts_default(&o);
     o.cancel = j->cancel;
+    o.fit_kmin = t->fit_kmin;
+    o.fit_kmax = t->fit_kmax;
+    o.detrend = (ljgap_topo_detrend)t->detrend;
+    o.tip_radius = t->tip_radius;
+    o.resolution = t->resolution;
     st = ljgap_topo_compute(t->h, &g, &o, &r, &j->rq.warn);
     free(t->h); /* a large map: the answer needs the bins only */
     t->h = NULL;
@@ -742,12 +774,19 @@ static int run_psd(job *j)
     put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
     put(j, grid, "profile", cJSON_CreateBool(r.profile));
     put(j, grid, "detrend",
-        cJSON_CreateString(t->periodic ? "mean"
-                           : r.profile ? "line"
-                                       : "plane"));
+        cJSON_CreateString(r.profile && r.detrend == LJGAP_DETREND_PLANE
+                               ? "line"
+                               : ljgap_topo_detrend_name(r.detrend)));
     put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
     put_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
     put_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
+    rel = put(j, j->ans, "reliable", cJSON_CreateObject());
+    put_num(j, rel, "k_min", r.rel_kmin, "reliable.k_min", -1);
+    put_num(j, rel, "k_max", r.rel_kmax, "reliable.k_max", -1);
+    put(j, rel, "by",
+        cJSON_CreateString(r.rel_by == LJGAP_RELIABLE_TIP          ? "tip"
+                           : r.rel_by == LJGAP_RELIABLE_RESOLUTION ? "resolution"
+                                                                   : "nyquist"));
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
     put_num(j, err, "h_rms", r.h_rms.err, "error.h_rms", -1);
@@ -763,6 +802,8 @@ static int run_psd(job *j)
         put(j, fit, "bins", cJSON_CreateNumber((double)r.fit.bins));
         put_num(j, fit, "chi2_red", r.fit.chi2_red, "fit.chi2_red", -1);
         put_num(j, fit, "corr_lnC_D", r.fit.corr, "fit.corr_lnC_D", -1);
+        put(j, fit, "band", cJSON_CreateString(r.fit.given ? "given" : "detected"));
+        put(j, fit, "sound", cJSON_CreateBool(r.fit.sound));
         put_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
         put_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
         put_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);

@@ -56,7 +56,10 @@
  * every periodogram and moment is a finite double. */
 #define TOPO_D_MIN 1e-12 /* dx, dy */
 #define TOPO_D_MAX 1.0
-#define TOPO_H_MAX 1e3 /* |height| */
+#define TOPO_H_MAX 1e3   /* |height| */
+#define TOPO_LEN_MAX 1e3 /* tip_radius, resolution (m) */
+#define TOPO_K_MIN 1e-3  /* the fit band's ends (1/m) */
+#define TOPO_K_MAX 1e15
 
 static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax",  "fixed_vmax",
                                             "samples", "seed",   "material", "units", NULL};
@@ -67,16 +70,19 @@ static const char *const traction_fields[] = {"g_ave", NULL};
 static const char *const pdf_fields[] = {"g_ave", "k2", "grid", NULL};
 static const char *const sweep_fields[] = {"vary", "values", NULL};
 static const char *const power_fields[] = {"kind", "D", "H", "k1", "k2", "C", "m0", "h_rms", NULL};
-static const char *const table_fields[] = {"kind", "k", "P", "tail", NULL};
-static const char *const tail_fields[] = {"exponent", NULL};
+static const char *const table_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
+static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 static const char *const range_fields[] = {"min", "max", "n", NULL};
 /* A simulation takes the dimensionless psd and its own fields only (no method, material). */
 static const char *const sim_fields[] = {"psd", "n",       "L", "realizations", "seed", "g_ave",
                                          "tol", "k_split", NULL};
 /* psd: a height map and, optionally, a material (the theory's domain in the answer). */
-static const char *const psd_fields[] = {"topography", "material", NULL};
-static const char *const topo_fields[] = {"heights", "dx", "dy", "periodic", NULL};
-static const char *const topo_text_fields[] = {"dx", "dy", "periodic", NULL}; /* the query */
+static const char *const psd_fields[] = {"topography", "material", "fit", NULL};
+static const char *const topo_fields[] = {"heights", "dx",         "dy",         "periodic",
+                                          "detrend", "tip_radius", "resolution", NULL};
+static const char *const topo_text_fields[] = {"dx",         "dy",         "periodic", "detrend",
+                                               "tip_radius", "resolution", NULL}; /* the query */
+static const char *const fit_fields[] = {"k_min", "k_max", NULL};
 
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
 {
@@ -446,6 +452,38 @@ static double *table_column(ljgap_verr *e, const cJSON *arr, const char *base, s
     return x;
 }
 
+/* The table's optional P_err: one standard error per P, each finite and >= 0, converted like P
+ * (the computation does not use them yet; a later step propagates them). */
+static void parse_table_errors(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
+                               size_t nP, ljgap_psd_spec *s)
+{
+    const cJSON *pe = member(psd, "P_err"), *it;
+    char ptr[PTR_LEN];
+    size_t i = 0, ne;
+    if (!pe) return;
+    ne = array_of(e, pe, "/psd/P_err", 2, PSD_TABLE_MAX, "the standard errors of P");
+    if (ne == 0) return;
+    if (nP > 0 && ne != nP) {
+        ljgap_verr_add(e, "/psd/P_err", "has %zu entries but P has %zu: give one error per P", ne,
+                       nP);
+        return;
+    }
+    if (!(s->P_err = malloc(ne * sizeof *s->P_err))) {
+        e->oom = 1;
+        return;
+    }
+    cJSON_ArrayForEach(it, pe)
+    {
+        snprintf(ptr, sizeof ptr, "/psd/P_err/%zu", i);
+        s->P_err[i] = NAN;
+        if (num(e, it, ptr, &s->P_err[i]) && !(s->P_err[i] >= 0))
+            ljgap_verr_add(e, ptr, "must be at least 0 (a standard error; got %g)", s->P_err[i]);
+        else if (mat)
+            s->P_err[i] = ljgap_units_P_to_dimless(mat, s->P_err[i]);
+        i++;
+    }
+}
+
 static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
                         ljgap_psd_spec *s)
 {
@@ -481,6 +519,7 @@ static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
                            "%s",
                            s->k[0], ljgap_k0(), k0_why());
     }
+    parse_table_errors(e, psd, mat, nP, s);
     tail = member(psd, "tail");
     if (tail && !cJSON_IsObject(tail)) {
         ljgap_verr_add(e, "/psd/tail", "must be an object {\"exponent\": q}");
@@ -494,6 +533,13 @@ static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
                            "q = %g must be below -2, or the tail "
                            "carries infinite variance",
                            s->tail_q);
+        if ((q = member(tail, "exponent_err")) &&
+            num(e, q, "/psd/tail/exponent_err", &s->tail_q_err) && !(s->tail_q_err >= 0)) {
+            ljgap_verr_add(e, "/psd/tail/exponent_err",
+                           "must be at least 0 (the exponent's standard error; got %g)",
+                           s->tail_q_err);
+            s->tail_q_err = 0;
+        }
     }
 }
 
@@ -1066,6 +1112,60 @@ static void parse_spacing(ljgap_verr *e, const cJSON *topo, const char *name, co
         *x = NAN;
 }
 
+/* An optional length in m at topo[name] (0 when absent), within [TOPO_D_MIN, TOPO_LEN_MAX]. */
+static void parse_length(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+                         double *x)
+{
+    char ptr[PTR_LEN];
+    const cJSON *it = member(obj, name);
+    *x = 0;
+    if (!it) return;
+    snprintf(ptr, sizeof ptr, "%s/%s", base, name);
+    if (!num_pos(e, it, ptr, x) || !in_core_range(e, ptr, name, *x, TOPO_D_MIN, TOPO_LEN_MAX))
+        *x = 0;
+}
+
+/* detrend, tip_radius and resolution of the topography object. */
+static void parse_topo_options(ljgap_verr *e, const cJSON *topo, ljgap_topo_spec *t)
+{
+    static const char *const modes[] = {"mean", "plane", "lines", "curvature", NULL};
+    const cJSON *d = member(topo, "detrend");
+    t->detrend = LJGAP_DETREND_AUTO;
+    if (d) {
+        int m = pick(e, d, "/topography/detrend", modes, "detrend",
+                     "\"mean\", \"plane\", \"lines\" or \"curvature\"");
+        if (m >= 0) t->detrend = ljgap_topo_detrend_parse(modes[m]);
+    }
+    parse_length(e, topo, "/topography", "tip_radius", &t->tip_radius);
+    parse_length(e, topo, "/topography", "resolution", &t->resolution);
+}
+
+/* The optional fit band {"k_min", "k_max"} (1/m; either or both). */
+static void parse_fit_band(ljgap_verr *e, const cJSON *root, ljgap_topo_spec *t)
+{
+    const cJSON *f = member(root, "fit"), *it;
+    t->fit_kmin = t->fit_kmax = 0;
+    if (!f) return;
+    if (!cJSON_IsObject(f)) {
+        ljgap_verr_add(e, "/fit", "must be an object {\"k_min\": 1/m, \"k_max\": 1/m}");
+        return;
+    }
+    only_fields(e, f, "/fit", fit_fields, NULL);
+    if ((it = member(f, "k_min")) &&
+        (!num_pos(e, it, "/fit/k_min", &t->fit_kmin) ||
+         !in_core_range(e, "/fit/k_min", "k_min (1/m)", t->fit_kmin, TOPO_K_MIN, TOPO_K_MAX)))
+        t->fit_kmin = 0;
+    if ((it = member(f, "k_max")) &&
+        (!num_pos(e, it, "/fit/k_max", &t->fit_kmax) ||
+         !in_core_range(e, "/fit/k_max", "k_max (1/m)", t->fit_kmax, TOPO_K_MIN, TOPO_K_MAX)))
+        t->fit_kmax = 0;
+    if (t->fit_kmin > 0 && t->fit_kmax > 0 && !(t->fit_kmax > t->fit_kmin)) {
+        ljgap_verr_add(e, "/fit/k_max", "k_max = %g must exceed k_min = %g", t->fit_kmax,
+                       t->fit_kmin);
+        t->fit_kmax = 0;
+    }
+}
+
 /* The topography object: heights (unless text: they came as the body), dx, dy, periodic. */
 static void parse_topography(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
                              ljgap_topo_spec *t)
@@ -1091,6 +1191,7 @@ static void parse_topography(ljgap_verr *e, const cJSON *root, const ljgap_limit
                            "must be true (the map is one period of the surface: no plane, no "
                            "window) or false");
     }
+    parse_topo_options(e, topo, t);
     if (!text) parse_heights(e, topo, lim, t);
     check_map(e, t);
 }
@@ -1102,6 +1203,7 @@ static void parse_psd_request(ljgap_verr *e, const cJSON *root, const ljgap_limi
     only_fields(e, root, "", psd_fields, NULL);
     parse_material(e, root, 0, rq);
     parse_topography(e, root, lim, text, &rq->topo);
+    parse_fit_band(e, root, &rq->topo);
 }
 
 int ljgap_request_parse_text(const cJSON *root, ljgap_topo_spec *heights, const ljgap_limits *lim,
@@ -1188,9 +1290,10 @@ void ljgap_request_free(ljgap_request *rq)
     if (!rq) return;
     free(rq->psd.k);
     free(rq->psd.P);
+    free(rq->psd.P_err);
     free(rq->x);
     free(rq->topo.h);
-    rq->psd.k = rq->psd.P = rq->x = rq->topo.h = NULL;
+    rq->psd.k = rq->psd.P = rq->psd.P_err = rq->x = rq->topo.h = NULL;
 }
 
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)

@@ -44,6 +44,9 @@ typedef struct {
     double *k, *P;      /* table: owned, n entries each */
     int has_tail;       /* table: tail given */
     double tail_q;      /* table: tail exponent */
+    double *P_err;      /* table: owned, n entries (1 σ of each P, in P's units: converted like
+                         * P), or NULL when not given; not used by the computation yet */
+    double tail_q_err;  /* table: the tail exponent's 1 σ (0 when not given) */
     int c_si;           /* power: level C is in SI (m^(2D-4)); converted with D and mat when
                          * the PSD is built (a sweep over D changes the conversion) */
     ljgap_material mat; /* the material, when c_si */
@@ -57,6 +60,11 @@ typedef struct {
     double dx;    /* spacing along a row, m */
     double dy;    /* spacing between rows, m (dx when not given) */
     int periodic; /* the map is one period of a periodic surface */
+    int detrend;  /* ljgap_topo_detrend (LJGAP_DETREND_AUTO when not given) */
+    double tip_radius; /* m, 0 when not given */
+    double resolution; /* m, 0 when not given */
+    double fit_kmin;   /* the fit band's ends (1/m), 0 when not given */
+    double fit_kmax;
 } ljgap_topo_spec;
 
 typedef struct {

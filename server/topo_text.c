@@ -239,7 +239,7 @@ done:
 /* The pointer of a query parameter: its field in the JSON request, or /NAME. */
 static void param_pointer(char *ptr, size_t size, const char *name, int where)
 {
-    static const char *const base[] = {"", "/topography", "/material"};
+    static const char *const base[] = {"", "/topography", "/material", "/fit"};
     size_t k = (size_t)snprintf(ptr, size, "%s/", base[where]);
     /* RFC 6901 escapes; the name cut at whole UTF-8 characters (the pointer goes out as JSON) */
     size_t n = ljgap_utf8_span(name, strnlen(name, 60));
@@ -254,10 +254,12 @@ static void param_pointer(char *ptr, size_t size, const char *name, int where)
 
 cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
 {
-    static const char *const topo_names[] = {"dx", "dy", "periodic", NULL};
+    static const char *const topo_names[] = {"dx",         "dy",         "periodic", "detrend",
+                                             "tip_radius", "resolution", NULL};
+    static const char *const fit_names[] = {"fit_k_min", "fit_k_max", NULL};
     static const char *const mat_names[] = {"E_star", "E1",     "nu1",     "E2",
                                             "nu2",    "dgamma", "epsilon", NULL};
-    cJSON *root = cJSON_CreateObject(), *topo = NULL, *mat = NULL;
+    cJSON *root = cJSON_CreateObject(), *topo = NULL, *mat = NULL, *fit = NULL;
     char ptr[TEXT_PTR_LEN + 80], q[QUOTE_MAX + 4];
     if (!root || !(topo = cJSON_AddObjectToObject(root, "topography"))) goto oom;
     for (size_t i = 0; i < np; i++) {
@@ -267,9 +269,13 @@ cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
             if (strcmp(name, topo_names[k]) == 0) where = 1;
         for (int k = 0; mat_names[k]; k++)
             if (strcmp(name, mat_names[k]) == 0) where = 2;
+        for (int k = 0; fit_names[k]; k++)
+            if (strcmp(name, fit_names[k]) == 0) where = 3;
+        /* fit_k_min is the JSON request's /fit/k_min */
+        const char *field = where == 3 ? name + 4 : name;
         for (size_t k = 0; k < i; k++)
             dup = dup || strcmp(name, p[k].name ? p[k].name : "") == 0;
-        param_pointer(ptr, sizeof ptr, name, where);
+        param_pointer(ptr, sizeof ptr, field, where);
         quote(q, name, strlen(name));
         if (dup) {
             ljgap_verr_add(e, ptr, "the query parameter \"%s\" is given more than once", q);
@@ -277,14 +283,16 @@ cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
         }
         if (!where) {
             ljgap_verr_add(e, ptr,
-                           "unknown query parameter \"%s\": psd takes dx, dy, periodic and the "
-                           "material's E_star (or E1, nu1, E2, nu2), dgamma, epsilon",
+                           "unknown query parameter \"%s\": psd takes dx, dy, periodic, detrend, "
+                           "tip_radius, resolution, fit_k_min, fit_k_max and the material's E_star "
+                           "(or E1, nu1, E2, nu2), dgamma, epsilon",
                            q);
             continue;
         }
-        cJSON *obj = where == 1 ? topo : mat;
+        cJSON *obj = where == 1 ? topo : where == 2 ? mat : fit;
         if (where == 2 && !mat && !(obj = mat = cJSON_AddObjectToObject(root, "material")))
             goto oom;
+        if (where == 3 && !fit && !(obj = fit = cJSON_AddObjectToObject(root, "fit"))) goto oom;
         /* a value that is not what the field takes goes in as a string, for request.c to
          * refuse at the field's pointer like the same string in a JSON request */
         cJSON *item = NULL;
@@ -292,6 +300,8 @@ cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
             int yes = !*val || strcmp(val, "true") == 0 || strcmp(val, "1") == 0;
             int no = strcmp(val, "false") == 0 || strcmp(val, "0") == 0;
             item = yes || no ? cJSON_CreateBool(yes) : NULL;
+        } else if (strcmp(name, "detrend") == 0) {
+            item = NULL; /* a string: request.c checks the name */
         } else {
             double x = NAN;
             char *end = NULL;
@@ -303,7 +313,7 @@ cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
             quote(q, val, strlen(val));
             item = cJSON_CreateString(q);
         }
-        if (!item || !cJSON_AddItemToObject(obj, name, item)) {
+        if (!item || !cJSON_AddItemToObject(obj, field, item)) {
             cJSON_Delete(item);
             goto oom;
         }

@@ -30,7 +30,7 @@
  *     status, detail, errors[] of {pointer, detail}; every pointer is a well-formed RFC 6901
  *     pointer that names a member of the request or a missing member of one that exists; for a
  *     text upload, a cell, row or the whole of /topography/heights within the lines sent, a
- *     field of /topography or /material, or /NAME of a parameter that was sent.
+ *     field of /topography, /fit or /material, or /NAME of a parameter that was sent.
  *
  * The pseudo-endpoint "@x-forwarded-for" feeds the body (up to its first NUL) to
  * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
@@ -196,8 +196,16 @@ typedef struct {
 /* 0 when ptr is a pointer a text upload may get (see the top of this file), else a reason. */
 static const char *text_pointer_problem(const text_req *t, const char *ptr)
 {
-    static const char *const fields[] = {"/topography/dx", "/topography/dy", "/topography/periodic",
-                                         "/material", NULL};
+    static const char *const fields[] = {"/topography/dx",
+                                         "/topography/dy",
+                                         "/topography/periodic",
+                                         "/topography/detrend",
+                                         "/topography/tip_radius",
+                                         "/topography/resolution",
+                                         "/fit/k_min",
+                                         "/fit/k_max",
+                                         "/material",
+                                         NULL};
     unsigned long row, col;
     int used = 0, more = 0;
     if (strcmp(ptr, "/topography/heights") == 0) return NULL;

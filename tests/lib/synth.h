@@ -34,23 +34,59 @@ typedef struct {
     double m2; /* Σ |q|² |c_q|² = mean(|∇h|²) */
 } synth_moments;
 
+/* The half spectrum *c ([ny][nx/2 + 1], zeroed) and *rng (GSL's mt19937 seeded with seed), for
+ * a generator to fill: 0, or -1 out of memory (nothing held then). */
+static int synth_begin(size_t nx, size_t ny, unsigned long seed, fftw_complex **c, gsl_rng **rng)
+{
+    *c = fftw_alloc_complex((nx / 2 + 1) * ny);
+    *rng = gsl_rng_alloc(gsl_rng_mt19937);
+    if (!*c || !*rng) {
+        fftw_free(*c);
+        gsl_rng_free(*rng);
+        return -1;
+    }
+    gsl_rng_set(*rng, seed);
+    memset(*c, 0, (nx / 2 + 1) * ny * sizeof **c);
+    return 0;
+}
+
+/* The amplitude re + i im at wavevector (i, j) of the half plane i >= 0 (j may be negative);
+ * on the column i = 0, which holds its own conjugates, also conj at (0, -j). */
+static void synth_set(fftw_complex *c, size_t nx, size_t ny, long i, long j, double re, double im)
+{
+    size_t nxc = nx / 2 + 1, jr = (size_t)(j < 0 ? j + (long)ny : j);
+    c[jr * nxc + (size_t)i][0] = re;
+    c[jr * nxc + (size_t)i][1] = im;
+    if (i == 0) {
+        size_t jc = (size_t)((long)ny - (long)jr);
+        c[jc * nxc][0] = re;
+        c[jc * nxc][1] = -im;
+    }
+}
+
+/* The map h from the half spectrum c (FFTW's c2r), c freed: 0, or -1 out of memory. */
+static int synth_end(fftw_complex *c, double *h, size_t nx, size_t ny)
+{
+    fftw_plan p = fftw_plan_dft_c2r_2d((int)ny, (int)nx, c, h, FFTW_ESTIMATE);
+    if (!p) {
+        fftw_free(c);
+        return -1;
+    }
+    fftw_execute(p);
+    fftw_destroy_plan(p);
+    fftw_free(c);
+    return 0;
+}
+
 /* Fills h[j*nx + i] (nx, ny even) with one realization; returns 0, or -1 when out of memory. */
 static int synth_surface(double *h, size_t nx, size_t ny, double dx, double dy, const synth_law *l,
                          unsigned long seed, int random_amplitude, synth_moments *mom)
 {
-    size_t nxc = nx / 2 + 1;
-    fftw_complex *c = fftw_alloc_complex(nxc * ny);
-    gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
+    fftw_complex *c;
+    gsl_rng *rng;
     double dqx = 2 * M_PI / ((double)nx * dx), dqy = 2 * M_PI / ((double)ny * dy);
     long hx = (long)nx / 2, hy = (long)ny / 2;
-    fftw_plan p;
-    if (!c || !rng) {
-        fftw_free(c);
-        gsl_rng_free(rng);
-        return -1;
-    }
-    gsl_rng_set(rng, seed);
-    memset(c, 0, nxc * ny * sizeof *c);
+    if (synth_begin(nx, ny, seed, &c, &rng)) return -1;
     mom->m0 = mom->m2 = 0;
     for (long j = -hy + 1; j < hy; j++) {
         for (long i = 0; i < hx; i++) {
@@ -60,28 +96,13 @@ static int synth_surface(double *h, size_t nx, size_t ny, double dx, double dy, 
             double a2 = synth_P(l, sqrt(q2)) * dqx * dqy;
             if (random_amplitude) a2 *= -log(gsl_rng_uniform_pos(rng));
             double a = sqrt(a2);
-            size_t jr = (size_t)(j < 0 ? j + (long)ny : j);
-            c[jr * nxc + (size_t)i][0] = a * cos(phi);
-            c[jr * nxc + (size_t)i][1] = a * sin(phi);
-            if (i == 0) { /* the column i = 0 holds its own conjugates */
-                size_t jc = (size_t)((long)ny - (long)jr);
-                c[jc * nxc][0] = a * cos(phi);
-                c[jc * nxc][1] = -a * sin(phi);
-            }
+            synth_set(c, nx, ny, i, j, a * cos(phi), a * sin(phi));
             mom->m0 += 2 * a2;
             mom->m2 += 2 * a2 * q2;
         }
     }
     gsl_rng_free(rng);
-    p = fftw_plan_dft_c2r_2d((int)ny, (int)nx, c, h, FFTW_ESTIMATE);
-    if (!p) {
-        fftw_free(c);
-        return -1;
-    }
-    fftw_execute(p);
-    fftw_destroy_plan(p);
-    fftw_free(c);
-    return 0;
+    return synth_end(c, h, nx, ny);
 }
 
 #endif

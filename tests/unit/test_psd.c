@@ -20,6 +20,7 @@
 #include "ljgap.h"
 #include "ljgap_sim.h"
 
+#include "../lib/realsurf.h"
 #include "../lib/synth.h"
 
 #include <cjson/cJSON.h>
@@ -258,16 +259,26 @@ static void json_periodic_map(void **state)
     assert_string_equal(get(grid, "window")->valuestring, "none");
     near(num(grid, "k_min"), 2 * M_PI / (64 * 2e-8), 1, "k_min");
     near(num(grid, "k_max"), M_PI / 2e-8, 1, "k_max");
-    /* the psd object: the bins and the fitted tail, nothing about the theory's domain */
+    /* the psd object: the band's lower edge, the bins, the band's upper edge (issue 25), with
+     * P_err and the fitted tail with its error, nothing about the theory's domain */
     psd = get(a.body, "psd");
     assert_string_equal(get(psd, "kind")->valuestring, "table");
-    char *ks = cJSON_PrintUnformatted(get(psd, "k")), *ka = cJSON_PrintUnformatted(k);
-    assert_string_equal(ks, ka);
+    const cJSON *pk = get(psd, "k"), *rel = get(a.body, "reliable");
+    assert_int_equal(cJSON_GetArraySize(pk), n + 2);
+    assert_int_equal(cJSON_GetArraySize(get(psd, "P_err")), n + 2);
+    near(cJSON_GetArrayItem(pk, 0)->valuedouble, num(rel, "k_min"), 0, "starts at the band");
+    assert_true(cJSON_GetArrayItem(pk, 0)->valuedouble < cJSON_GetArrayItem(k, 0)->valuedouble);
+    for (size_t i = 0; i < n; i++)
+        near(cJSON_GetArrayItem(pk, (int)i + 1)->valuedouble,
+             cJSON_GetArrayItem(k, (int)i)->valuedouble, 0, "the bins' k");
+    assert_true(cJSON_GetArrayItem(pk, (int)n + 1)->valuedouble <= num(rel, "k_max"));
+    assert_string_equal(get(rel, "by")->valuestring, "nyquist");
     near(num(get(psd, "tail"), "exponent"), 2 * num(fit, "D") - 8, 1e-12, "tail exponent");
+    near(num(get(psd, "tail"), "exponent_err"), 2 * num(get(err, "fit"), "D"), 1e-12,
+         "tail exponent's error");
+    assert_string_equal(get(grid, "detrend")->valuestring, "mean");
     assert_null(cJSON_GetObjectItemCaseSensitive(a.body, "domain"));
     assert_null(cJSON_GetObjectItemCaseSensitive(a.body, "si"));
-    free(ks);
-    free(ka);
     cJSON_Delete(a.body);
     free(req);
     free(m.h);
@@ -633,6 +644,128 @@ static void bad_text_query(void **state)
     free(t);
 }
 
+/* A measured-like map (roll-off, cutoff at 20 k_f): the fit is sound inside its band, the psd
+ * object keeps the bins up to Nyquist without a tail (the bins above the band leave the law),
+ * a warning says so; the same surface without the cutoff gets the tail. */
+static void tail_only_where_the_law_holds(void **state)
+{
+    const size_t n = 128;
+    double kf = 2 * M_PI / (n * 1e-8), m0;
+    map m = {n, n, 1e-8, malloc(n * n * sizeof(double)), 0};
+    assert_non_null(m.h);
+    for (int cut = 1; cut >= 0; cut--) {
+        realsurf_spec s = {0};
+        s.D = 2.4, s.k_r = 2 * kf, s.k_c = cut ? 20 * kf : 0;
+        s.C = realsurf_level(s.D, s.k_r, M_PI / 1e-8, 1e-18);
+        assert_int_equal(realsurf_make(m.h, n, n, 1e-8, 1e-8, &s, 4, &m0), 0);
+        char *req = map_json(&m, 1, NULL);
+        answer a = ask("psd", req);
+        assert_int_equal(a.status, 200);
+        const cJSON *fit = get(a.body, "fit"), *psd = get(a.body, "psd");
+        assert_true(cJSON_IsTrue(get(fit, "sound")));
+        near(num(fit, "D"), 2.4, 0.1, "D");
+        assert_int_equal(cJSON_GetArraySize(get(psd, "P_err")), cJSON_GetArraySize(get(psd, "k")));
+        if (cut) {
+            assert_true(num(fit, "k_max") <= 20 * kf * 1.13);
+            assert_null(cJSON_GetObjectItemCaseSensitive(psd, "tail"));
+            char *w = cJSON_PrintUnformatted(get(get(a.body, "meta"), "warnings"));
+            assert_non_null(strstr(w, "the psd object has no tail"));
+            free(w);
+        } else {
+            near(num(get(psd, "tail"), "exponent"), 2 * num(fit, "D") - 8, 1e-12, "tail");
+        }
+        cJSON_Delete(a.body);
+        free(req);
+    }
+    free(m.h);
+}
+
+/* ---- the inputs of issue 25: fit band, detrend, tip radius, resolution, P_err ---- */
+
+static void new_inputs(void **state)
+{
+    map m = make_map(64, 64, 1e-8, 2.4, 1e-9, 21);
+    double kf = 2 * M_PI / (64 * 1e-8);
+    buf x = {0};
+    add(&x, ",\"fit\":{\"k_min\":%.17g,\"k_max\":%.17g}", 2 * kf, 20 * kf);
+    char *req = map_json(&m, 0, x.s);
+    answer a = ask("psd", req);
+    assert_int_equal(a.status, 200);
+    const cJSON *fit = get(a.body, "fit");
+    assert_string_equal(get(fit, "band")->valuestring, "given");
+    assert_true(num(fit, "k_min") >= 2 * kf * (1 - 1e-9) && num(fit, "k_max") <= 20 * kf);
+    assert_string_equal(get(get(a.body, "grid"), "detrend")->valuestring, "plane");
+    cJSON_Delete(a.body), free(req), free(x.s);
+    /* the same from a text upload's query */
+    char *t = map_text(&m, 0);
+    x = (buf){0};
+    add(&x, "dx=1e-8&fit_k_min=%.17g&fit_k_max=%.17g&detrend=lines&resolution=1e-7", 2 * kf,
+        20 * kf);
+    a = ask_text("psd", x.s, t, strlen(t));
+    assert_int_equal(a.status, 200);
+    assert_string_equal(get(get(a.body, "fit"), "band")->valuestring, "given");
+    assert_string_equal(get(get(a.body, "grid"), "detrend")->valuestring, "lines");
+    assert_string_equal(get(get(a.body, "reliable"), "by")->valuestring, "resolution");
+    near(num(get(a.body, "reliable"), "k_max"), M_PI / 1e-7, 1e-3, "pi / resolution");
+    cJSON_Delete(a.body), free(x.s);
+    /* bad values at their pointers, JSON and query */
+    const char *topo = ",\"dx\":1e-8";
+    char rest[200];
+    const struct {
+        const char *field, *ptr;
+    } bad[] = {{"\"detrend\":\"tilt\"", "/topography/detrend"},
+               {"\"detrend\":3", "/topography/detrend"},
+               {"\"tip_radius\":-1e-8", "/topography/tip_radius"},
+               {"\"tip_radius\":\"big\"", "/topography/tip_radius"},
+               {"\"resolution\":0", "/topography/resolution"},
+               {"\"resolution\":1e9", "/topography/resolution"}};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        snprintf(rest, sizeof rest, "%s,%s", topo, bad[i].field);
+        expect_json(bad_json("1e-9", 0, 0, NULL, rest, NULL), bad[i].ptr, bad[i].field);
+    }
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"k_min\":-1}"), "/fit/k_min",
+                "k_min < 0");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"k_min\":1e8,\"k_max\":1e7}"),
+                "/fit/k_max", "k_max below k_min");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":{\"kmin\":1e8}"), "/fit/kmin",
+                "unknown field of fit");
+    expect_json(bad_json("1e-9", 0, 0, NULL, NULL, ",\"fit\":[1,2]"), "/fit", "fit an array");
+    expect_text("dx=1e-8&fit_k_min=abc", map_text(&m, 0), "/fit/k_min", NULL, "fit_k_min a word");
+    expect_text("dx=1e-8&tip_radius=-1", map_text(&m, 0), "/topography/tip_radius", NULL,
+                "tip_radius < 0");
+    expect_text("dx=1e-8&detrend=tilt", map_text(&m, 0), "/topography/detrend", NULL,
+                "detrend tilt");
+    free(t);
+    /* P_err and tail.exponent_err of a table: accepted, checked */
+    const char *tab = "{\"psd\":{\"kind\":\"table\",\"k\":[1,2,4],\"P\":[1e-3,2e-4,3e-5]%s},"
+                      "\"tol\":1e-4}";
+    const struct {
+        const char *extra, *ptr;
+    } tb[] = {{",\"P_err\":[1e-4,1e-5,-1e-6]", "/psd/P_err/2"},
+              {",\"P_err\":[1e-4,\"x\",1e-6]", "/psd/P_err/1"},
+              {",\"P_err\":[1e-4,1e-5]", "/psd/P_err"},
+              {",\"P_err\":3", "/psd/P_err"},
+              {",\"tail\":{\"exponent\":-3,\"exponent_err\":-0.1}", "/psd/tail/exponent_err"},
+              {",\"tail\":{\"exponent\":-3,\"exponent_err\":\"a\"}", "/psd/tail/exponent_err"}};
+    for (size_t i = 0; i < sizeof tb / sizeof *tb; i++) {
+        x = (buf){0};
+        add(&x, tab, tb[i].extra);
+        expect_one(ask("adhesion", x.s), tb[i].ptr, NULL, tb[i].extra);
+        free(x.s);
+    }
+    x = (buf){0};
+    add(&x, tab, ",\"P_err\":[1e-4,0,1e-6],\"tail\":{\"exponent\":-3,\"exponent_err\":0.1}");
+    buf y = {0};
+    add(&y, tab, ",\"tail\":{\"exponent\":-3}");
+    a = ask("adhesion", x.s);
+    answer b = ask("adhesion", y.s);
+    assert_int_equal(a.status, 200);
+    assert_int_equal(b.status, 200);
+    near(num(a.body, "dgamma_eff"), num(b.body, "dgamma_eff"), 0, "the errors change nothing");
+    cJSON_Delete(a.body), cJSON_Delete(b.body), free(x.s), free(y.s);
+    free(m.h);
+}
+
 /* ---- out of memory, threads ---- */
 
 static void out_of_memory(void **state)
@@ -707,6 +840,8 @@ int main(void)
         cmocka_unit_test(bad_json_inputs),
         cmocka_unit_test(bad_text_inputs),
         cmocka_unit_test(bad_text_query),
+        cmocka_unit_test(new_inputs),
+        cmocka_unit_test(tail_only_where_the_law_holds),
         cmocka_unit_test(out_of_memory),
         cmocka_unit_test(concurrent_with_simulation),
     };
