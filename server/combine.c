@@ -279,3 +279,88 @@ int ljgap_run_combine(job *j)
     ljgap_combine_result_free(&r);
     return LJGAP_OK;
 }
+
+/* ---- ljgap combine: the request from files ---- */
+
+/* The psd object of one document (see handler.h): a new object, or NULL with why in err. */
+static cJSON *psd_of(const cJSON *doc, char *err, size_t errlen)
+{
+    const cJSON *psd = cJSON_GetObjectItemCaseSensitive(doc, "psd");
+    const cJSON *k = cJSON_GetObjectItemCaseSensitive(doc, "k");
+    const cJSON *P = cJSON_GetObjectItemCaseSensitive(doc, "P");
+    const cJSON *E =
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(doc, "error"), "P");
+    const cJSON *fit = cJSON_GetObjectItemCaseSensitive(doc, "fit"), *tail, *it;
+    double lo = 0, hi = INFINITY;
+    cJSON *o, *ko, *Po, *Eo;
+    if (!cJSON_IsObject(doc)) {
+        snprintf(err, errlen, "not a JSON object");
+        return NULL;
+    }
+    if (cJSON_IsObject(psd) && cJSON_GetObjectItemCaseSensitive(psd, "P_err"))
+        return cJSON_Duplicate(psd, 1); /* a /v1/psd answer whose psd object has errors */
+    if (!psd && cJSON_GetObjectItemCaseSensitive(doc, "P_err"))
+        return cJSON_Duplicate(doc, 1); /* a psd object */
+    if (!cJSON_IsArray(k) || !cJSON_IsArray(P) || !cJSON_IsArray(E) ||
+        cJSON_GetArraySize(k) != cJSON_GetArraySize(P) ||
+        cJSON_GetArraySize(k) != cJSON_GetArraySize(E)) {
+        snprintf(err, errlen,
+                 "neither a /v1/psd answer (k, P, error.P) nor a psd object (k, P, P_err)");
+        return NULL;
+    }
+    /* a /v1/psd answer without P_err in its psd object: its bins over the fit's band */
+    if (cJSON_IsObject(fit)) {
+        lo = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_min"));
+        hi = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_max"));
+    }
+    if (!(o = cJSON_CreateObject()) || !cJSON_AddStringToObject(o, "kind", "table") ||
+        !(ko = cJSON_AddArrayToObject(o, "k")) || !(Po = cJSON_AddArrayToObject(o, "P")) ||
+        !(Eo = cJSON_AddArrayToObject(o, "P_err")))
+        goto oom;
+    for (int i = 0; (it = cJSON_GetArrayItem(k, i)); i++) {
+        double x = cJSON_GetNumberValue(it);
+        if (!(x >= lo * (1 - 1e-9) && x <= hi * (1 + 1e-9))) continue;
+        if (!cJSON_AddItemToArray(ko, cJSON_Duplicate(it, 0)) ||
+            !cJSON_AddItemToArray(Po, cJSON_Duplicate(cJSON_GetArrayItem(P, i), 0)) ||
+            !cJSON_AddItemToArray(Eo, cJSON_Duplicate(cJSON_GetArrayItem(E, i), 0)))
+            goto oom;
+    }
+    tail = cJSON_GetObjectItemCaseSensitive(psd, "tail");
+    if (cJSON_IsObject(tail) && !cJSON_AddItemToObject(o, "tail", cJSON_Duplicate(tail, 1)))
+        goto oom;
+    return o;
+oom:
+    cJSON_Delete(o);
+    snprintf(err, errlen, "out of memory");
+    return NULL;
+}
+
+char *ljgap_combine_body(const char *const *docs, const size_t *lens, size_t n, double per_decade,
+                         char *err, size_t errlen)
+{
+    cJSON *req = cJSON_CreateObject(), *arr = req ? cJSON_AddArrayToObject(req, "psds") : NULL;
+    char *out = NULL, why[200];
+    if (!arr ||
+        (per_decade > 0 && !cJSON_AddNumberToObject(req, "points_per_decade", per_decade))) {
+        snprintf(err, errlen, "out of memory");
+        goto end;
+    }
+    for (size_t i = 0; i < n; i++) {
+        cJSON *doc = cJSON_ParseWithLength(docs[i], lens[i]), *psd;
+        if (!doc) {
+            snprintf(err, errlen, "document %zu is not valid JSON", i + 1);
+            goto end;
+        }
+        psd = psd_of(doc, why, sizeof why);
+        cJSON_Delete(doc);
+        if (!psd || !cJSON_AddItemToArray(arr, psd)) {
+            cJSON_Delete(psd);
+            snprintf(err, errlen, "document %zu: %s", i + 1, psd ? "out of memory" : why);
+            goto end;
+        }
+    }
+    if (!(out = cJSON_PrintUnformatted(req))) snprintf(err, errlen, "out of memory");
+end:
+    cJSON_Delete(req);
+    return out;
+}
