@@ -153,6 +153,9 @@ static int fit_combined(const ljgap_combine_result *r, ljgap_topo_fit *f)
     f->C.value = exp(lnC);
     f->C.err = f->C.value * sqrt(var_lnC);
     f->corr = var_lnC > 0 ? -xm * var_s / sqrt(var_lnC * var_s) : 0;
+    if (!isfinite(f->C.value) || !isfinite(f->C.err) || !isfinite(f->D.err) || !isfinite(f->corr) ||
+        !isfinite(chi2_red))
+        return -1; /* beyond the range of a double: no fit */
     f->kmin = r->k[0];
     f->kmax = r->k[r->n - 1];
     f->bins = r->n;
@@ -219,6 +222,12 @@ int ljgap_combine(const ljgap_combine_input *in, size_t m, const ljgap_combine_o
     i0 = (long)ceil(o->per_decade * log10(lo) - 1e-6);
     i1 = (long)floor(o->per_decade * log10(hi) + 1e-6);
     size_t cap = i1 >= i0 ? (size_t)(i1 - i0 + 1) : 0;
+    if (cap > LJGAP_COMBINE_GRID_MAX) {
+        ljgap_warn(w,
+                   "the bands span k = %g … %g 1/m: %zu grid points at %g a decade, more than %d",
+                   lo, hi, cap, o->per_decade, LJGAP_COMBINE_GRID_MAX);
+        return LJGAP_EINVAL;
+    }
     if (cap) {
         r->k = malloc(cap * sizeof *r->k);
         r->P = malloc(cap * sizeof *r->P);
@@ -251,6 +260,10 @@ int ljgap_combine(const ljgap_combine_input *in, size_t m, const ljgap_combine_o
                 sig *= sqrt(chi2 / (c - 1));
                 r->inflated++;
             }
+        }
+        if (!isfinite(exp(ym) * sig) || !(exp(ym) > 0)) {
+            ljgap_warn(w, "the combined P at k = %g 1/m is beyond the range of a double", k);
+            return LJGAP_EINVAL;
         }
         r->k[r->n] = k;
         r->P[r->n] = exp(ym);

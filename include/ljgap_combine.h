@@ -22,9 +22,11 @@
 extern "C" {
 #endif
 
-#define LJGAP_COMBINE_MIN 2  /* inputs at least */
-#define LJGAP_COMBINE_MAX 16 /* inputs at most */
-#define LJGAP_COMBINE_GAPS 15
+#define LJGAP_COMBINE_MIN 2           /* inputs at least */
+#define LJGAP_COMBINE_MAX 16          /* inputs at most */
+#define LJGAP_COMBINE_GAPS 15         /* gaps reported at most */
+#define LJGAP_COMBINE_GRID_MAX 10000  /* grid points at most */
+#define LJGAP_COMBINE_REL_ERR_MAX 1e3 /* P_err/P at most: beyond, a point carries nothing */
 
 /* One measurement's PSD table (not owned). */
 typedef struct {
@@ -73,7 +75,9 @@ typedef struct {
 
 /* Combines in[0..m) (LJGAP_COMBINE_MIN <= m <= LJGAP_COMBINE_MAX). Returns LJGAP_OK, with
  * warnings for gaps, disagreement and a fitted D outside (2, 3); LJGAP_EINVAL with a warning
- * when the inputs are not valid tables or fewer than two grid points are covered;
+ * when the inputs are not valid tables (P_err/P above LJGAP_COMBINE_REL_ERR_MAX too), fewer
+ * than two grid points are covered, the bands span more than LJGAP_COMBINE_GRID_MAX grid
+ * points, or a combined value is beyond the range of a double;
  * LJGAP_ENOMEM; LJGAP_ECANCEL. res is released with ljgap_combine_result_free (also after a
  * failure). */
 int ljgap_combine(const ljgap_combine_input *in, size_t m, const ljgap_combine_opts *o,

@@ -44,8 +44,10 @@ static const char *const psd_fields[] = {"kind", "k", "P", "P_err", "tail", NULL
 static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 static const char *const col_names[3] = {"k", "P", "P_err"};
 
-/* Column c of psds[i] (n numbers at base/NAME/j) into a new array; NULL when any is bad. */
-static double *column(ljgap_verr *e, const cJSON *arr, const char *base, int c, size_t n)
+/* Column c of psds[i] (n numbers at base/NAME/j) into a new array; NULL when any is bad. P: the
+ * P column, for P_err's (NULL when it was bad). */
+static double *column(ljgap_verr *e, const cJSON *arr, const char *base, int c, size_t n,
+                      const double *P)
 {
     double *x = malloc(n * sizeof *x);
     const cJSON *it;
@@ -65,6 +67,10 @@ static double *column(ljgap_verr *e, const cJSON *arr, const char *base, int c, 
             bad++;
         } else if (c == 2 && !(x[j] >= 0)) {
             ljgap_verr_add(e, ptr, "P_err must be zero or positive (got %g)", x[j]);
+            bad++;
+        } else if (c == 2 && P && P[j] > 0 && !(x[j] / P[j] <= LJGAP_COMBINE_REL_ERR_MAX)) {
+            ljgap_verr_add(e, ptr, "P_err = %g is more than %g times P = %g: no information", x[j],
+                           LJGAP_COMBINE_REL_ERR_MAX, P[j]);
             bad++;
         } else if (c == 0 && j && x[j - 1] > 0 && !(x[j] > x[j - 1])) {
             ljgap_verr_add(e, ptr, "k must be strictly increasing: k[%zu] = %g follows k[%zu] = %g",
@@ -146,7 +152,7 @@ static void parse_one(ljgap_verr *e, const cJSON *psd, const char *base,
         parse_tail(e, tail, base, &s->in[i]);
     if (!n[0] || n[1] != n[0] || n[2] != n[0]) return;
     for (int c = 0; c < 3; c++)
-        s->col[i][c] = column(e, col[c], base, c, n[0]);
+        s->col[i][c] = column(e, col[c], base, c, n[0], s->col[i][1]);
     s->in[i].n = n[0];
     s->in[i].k = s->col[i][0];
     s->in[i].P = s->col[i][1];

@@ -323,6 +323,7 @@ static const struct {
     {"{'psds':[" T1 ",{'k':[-1,1],'P':[1,1],'P_err':[1,1]}]}", "/psds/1/k/0"},
     {"{'psds':[" T1 ",{'k':[1,2],'P':[1,1],'P_err':[1,1e999]}]}", "/psds/1/P_err/1"},
     {"{'psds':[" T1 ",{'k':[1,2],'P':[1,1,1],'P_err':[1,1]}]}", "/psds/1/P"},
+    {"{'psds':[" T1 ",{'k':[1,2],'P':[1,1e-9],'P_err':[1,1]}]}", "/psds/1/P_err/1"},
     {"{'psds':[" T1 ",{'k':[1,2],'P':[1,1],'P_err':[1]}]}", "/psds/1/P_err"},
     {"{'psds':[" T1 ",{'k':[1],'P':[1,1],'P_err':[1,1]}]}", "/psds/1/k"},
     {"{'psds':[" T1 ",{'kind':'power','k':[1,2],'P':[1,1],'P_err':[1,1]}]}", "/psds/1/kind"},
@@ -379,6 +380,21 @@ static void too_many(void **state)
 
 static void outside_model(void **state)
 {
+    static const char *const beyond[] = {
+        /* 600 decades: 60001 grid points */
+        "{'psds':[{'k':[1e-300,1e300],'P':[1,1],'P_err':[1,1]},{'k':[1,2],'P':[1,1],"
+        "'P_err':[1,1]}],'points_per_decade':100}",
+        /* P beyond the range of a double once combined */
+        "{'psds':[{'k':[1,10],'P':[1.7e308,1.79e308],'P_err':[1e308,1e308]},"
+        "{'k':[2,20],'P':[1e308,1.5e308],'P_err':[0,1e300]}]}",
+    };
+    for (int i = 0; i < 2; i++) {
+        answer b = ask(beyond[i]);
+        assert_int_equal(b.status, 422);
+        assert_string_equal(cJSON_GetObjectItem(b.body, "type")->valuestring,
+                            "/problems/outside-model");
+        cJSON_Delete(b.body);
+    }
     answer a = ask("{'psds':[{'k':[1.01e5,1.02e5],'P':[1,1],'P_err':[0.1,0.1]},"
                    "{'k':[1.03e5,1.05e5],'P':[1,1],'P_err':[0.1,0.1]}]}");
     const cJSON *e = cJSON_GetArrayItem(cJSON_GetObjectItem(a.body, "errors"), 0);
