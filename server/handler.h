@@ -41,7 +41,7 @@ void ljgap_handler_set_limits(const ljgap_limits *l);
 
 #define LJGAP_TOPO_POINTS_DEFAULT (1L << 23) /* 8 Mi heights: a 2896² map, 64 MiB of doubles */
 
-/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd".
+/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd", "psd/combine".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
