@@ -61,6 +61,7 @@ static double *column(ljgap_verr *e, const cJSON *arr, const char *base, int c, 
     {
         snprintf(ptr, sizeof ptr, "%s/%s/%zu", base, col_names[c], j);
         if (!ljgap_v_num(e, it, ptr, &x[j])) {
+            x[j] = NAN; /* read by the next one's checks */
             bad++;
         } else if (c < 2 && !(x[j] > 0)) {
             ljgap_verr_add(e, ptr, "%s must be positive (got %g)", col_names[c], x[j]);
