@@ -1,8 +1,9 @@
 /* topo.c -- the topography PSD (issue 15): speed on a large text map, accuracy on synthetic
  * surfaces. Figures, never assertions (bench/topo.sh runs it and writes bench/results/).
  *
- *   topo gen FILE N        an N × N periodic synthetic map (tests/lib/synth.h: D = 2.3,
- *                          dx = 10 nm, h_rms 5 nm) as text, "%.3e" values: 2048² is ~42 MiB
+ *   topo gen FILE N [DX]   an N × N periodic synthetic map (tests/lib/synth.h: D = 2.3,
+ *                          dx = 10 nm, h_rms 5 nm) as text, "%.3e" values: 2048² is ~42 MiB;
+ *                          with DX, the same law sampled at DX (another scale of one surface)
  *   topo time FILE DX      medians over repeated runs of the stages of POST /v1/psd with that
  *                          body: the text parse, the core (detrend, window, FFT, bins, fit),
  *                          and the whole handler (parse, validation, core, JSON answer)
@@ -33,13 +34,16 @@ static synth_law law(size_t n, double D, double hrms)
     return l;
 }
 
-static int gen(const char *path, size_t n)
+/* An n² map with spacing dx: the law of law(n, 2.3, 5 nm) (a 10 nm map); with another dx, the
+ * same C over everything that grid resolves (one surface measured at another scale, seed 2). */
+static int gen(const char *path, size_t n, double dx)
 {
     synth_law l = law(n, 2.3, 5e-9);
     synth_moments m;
     double *h = malloc(n * n * sizeof *h);
     FILE *f = fopen(path, "w");
-    if (!h || !f || synth_surface(h, n, n, DX, DX, &l, 1, 1, &m)) return 1;
+    if (dx != DX) l.k1 = 0, l.k2 = M_PI / dx;
+    if (!h || !f || synth_surface(h, n, n, dx, dx, &l, dx == DX ? 1 : 2, 1, &m)) return 1;
     for (size_t j = 0; j < n; j++)
         for (size_t i = 0; i < n; i++)
             fprintf(f, "%.3e%c", h[j * n + i], i + 1 < n ? ' ' : '\n');
@@ -184,9 +188,10 @@ static int accuracy(void)
 int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
-    if (argc == 4 && strcmp(argv[1], "gen") == 0) return gen(argv[2], (size_t)atol(argv[3]));
+    if ((argc == 4 || argc == 5) && strcmp(argv[1], "gen") == 0)
+        return gen(argv[2], (size_t)atol(argv[3]), argc == 5 ? atof(argv[4]) : DX);
     if (argc == 4 && strcmp(argv[1], "time") == 0) return time_stages(argv[2], atof(argv[3]));
     if (argc == 2 && strcmp(argv[1], "accuracy") == 0) return accuracy();
-    fprintf(stderr, "usage: topo gen FILE N | topo time FILE DX | topo accuracy\n");
+    fprintf(stderr, "usage: topo gen FILE N [DX] | topo time FILE DX | topo accuracy\n");
     return 2;
 }

@@ -11,6 +11,10 @@
  *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
  *                         a progress bar when it is a terminal (nothing otherwise, so logs and
  *                         pipes stay clean); Ctrl-C cancels the run (a 503 problem, exit 1)
+ *   ljgap combine [--points-per-decade G] FILE FILE ...
+ *                         one PSD from several measurements (POST /v1/psd/combine): each FILE
+ *                         a /v1/psd answer or a psd object ('-' standard input, once);
+ *                         ljgap_combine_body makes the request
  *   ljgap --csv NAME ...  the answer as CSV (traction, pdf, sweep, simulations), as
  *                         POST /v1/NAME with Accept: text/csv gives it
  *
@@ -37,6 +41,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: ljgap [--csv] NAME [FILE]\n"
             "       ljgap psd --dx M [--dy M] [--periodic] [--NAME VALUE ...] [FILE]\n"
+            "       ljgap combine [--points-per-decade G] [--request] FILE FILE ...\n"
             "       ljgap --help | --version\n"
             "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact,\n"
             "psd) from FILE or standard input and prints the JSON answer on standard output.\n"
@@ -45,6 +50,9 @@ static void usage(FILE *f)
             "parameters of POST /v1/psd: dx, dy (m, default dx), periodic, detrend (mean,\n"
             "plane, lines, curvature), tip_radius, resolution (m), fit_k_min, fit_k_max (1/m),\n"
             "and a material's E_star (or E1, nu1, E2, nu2), dgamma, epsilon.\n"
+            "combine makes one PSD of several measurements of one surface (POST\n"
+            "/v1/psd/combine): each FILE is a /v1/psd answer or a psd object (k, P, P_err);\n"
+            "the request is printed instead with --request.\n"
             "NAME simulations runs one numerical-model job in the foreground and prints its\n"
             "result; a progress bar goes to standard error when it is a terminal, and Ctrl-C\n"
             "cancels the run.\n"
@@ -161,6 +169,67 @@ static int text_options(int argc, char **argv, ljgap_param *params, const char *
     return n;
 }
 
+/* ljgap combine [--points-per-decade G] [--request] FILE FILE ...: the answer (or with
+ * --request the request) into *rep; 2 when the command line or a file is wrong. */
+static int run_combine(int argc, char **argv, const ljgap_call *call, ljgap_reply *rep)
+{
+    const char *docs[64];
+    size_t lens[64], n = 0;
+    double g = 0;
+    int rc = 2, request = 0;
+    char err[300], *body = NULL;
+    for (int i = 2; i < argc; i++) {
+        FILE *f;
+        if (strcmp(argv[i], "--points-per-decade") == 0 && i + 1 < argc) {
+            char *end;
+            g = strtod(argv[++i], &end);
+            if (*end || !(g > 0)) {
+                fprintf(stderr, "ljgap: --points-per-decade needs a positive number\n");
+                goto end;
+            }
+            continue;
+        }
+        if (strcmp(argv[i], "--request") == 0) {
+            request = 1;
+            continue;
+        }
+        if (strncmp(argv[i], "--", 2) == 0 || n == 64) {
+            usage(stderr);
+            goto end;
+        }
+        f = strcmp(argv[i], "-") == 0 ? stdin : fopen(argv[i], "rb");
+        if (!f || !(docs[n] = read_all(f, &lens[n]))) {
+            fprintf(stderr, "ljgap: %s: %s\n", argv[i], strerror(errno));
+            if (f && f != stdin) fclose(f);
+            goto end;
+        }
+        if (f != stdin) fclose(f);
+        n++;
+    }
+    if (n < 2) {
+        fprintf(stderr, "ljgap: combine takes two files or more\n");
+        goto end;
+    }
+    if (!(body = ljgap_combine_body(docs, lens, n, g, err, sizeof err))) {
+        fprintf(stderr, "ljgap: combine: %s\n", err);
+        goto end;
+    }
+    if (request) {
+        rep->status = 200;
+        rep->body = body;
+        rep->len = strlen(body);
+        body = NULL;
+    } else {
+        ljgap_handle_call("psd/combine", body, strlen(body), call, rep);
+    }
+    rc = 0;
+end:
+    for (size_t i = 0; i < n; i++)
+        free((char *)docs[i]);
+    free(body);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     FILE *in = stdin;
@@ -189,6 +258,10 @@ int main(int argc, char **argv)
     if (argc < 2 || argv[1][0] == '-') {
         usage(stderr);
         return 2;
+    }
+    if (strcmp(argv[1], "combine") == 0) {
+        if (run_combine(argc, argv, &call, &rep)) goto end;
+        goto print;
     }
     for (int i = 2; i < argc; i++)
         if (strncmp(argv[i], "--", 2) == 0 && argv[i][2]) nparams = 0; /* a text upload */
@@ -222,6 +295,7 @@ int main(int argc, char **argv)
     } else {
         ljgap_handle_call(argv[1], body, len, &call, &rep);
     }
+print:
     /* a CSV body ends in its own newline; a JSON one gets one */
     if (fwrite(rep.body, 1, rep.len, stdout) != rep.len ||
         (!(rep.len && rep.body[rep.len - 1] == '\n') && putchar('\n') == EOF) ||

@@ -47,6 +47,7 @@
  */
 #include "handler.h"
 #include "accept.h"
+#include "answer.h"
 #include "csv.h"
 #include "ljgap_sim.h"
 #include "ljgap_topo.h"
@@ -102,18 +103,6 @@ void ljgap_handler_set_limits(const ljgap_limits *l)
 {
     limits = *l;
 }
-
-/* One computation: the validated request and the answer being built. */
-typedef struct {
-    ljgap_request rq;           /* what was asked; rq.warn collects every warning */
-    cJSON *ans;                 /* the answer object */
-    double deadline;            /* ljgap_now() value when the time cap runs out */
-    const volatile int *cancel; /* the call's cancel flag (or the limits' one) */
-    int oom;                    /* an allocation failed while building ans */
-    char fail[DETAIL_LEN];      /* extra detail for a failed status, "" or starting with a space */
-    const char *bad_ptr;        /* pointer of an LJGAP_EINVAL problem (NULL: "/psd") */
-    const char *bad_head;       /* its detail's first words (NULL: the PSD's) */
-} job;
 
 /* ---- replies ---- */
 
@@ -851,6 +840,7 @@ static const route routes[] = {
     {"sweep", LJGAP_EP_SWEEP, run_sweep},
     {"contact", LJGAP_EP_CONTACT, run_contact},
     {"psd", LJGAP_EP_PSD, run_psd},
+    {"psd/combine", LJGAP_EP_COMBINE, ljgap_run_combine},
 };
 
 static const route *route_find(const char *name)
@@ -1064,7 +1054,7 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
         /* the name may be any bytes: quote only its first whole UTF-8 characters */
         snprintf(detail, sizeof detail,
                  "no endpoint \"%.*s\": the endpoints are adhesion, "
-                 "traction, pdf, sweep, contact and psd",
+                 "traction, pdf, sweep, contact, psd and psd/combine",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
         reply_problem(out, P_NOT_FOUND, detail, NULL);
@@ -1287,4 +1277,22 @@ void ljgap_sim_status_answer(const char *status_json, int http_status, const cha
     out->content_type = CT_JSON;
 end:
     cJSON_Delete(doc);
+}
+
+/* ---- for endpoints run in their own files (answer.h) ---- */
+
+cJSON *ljgap_ans_put(job *j, cJSON *parent, const char *key, cJSON *item)
+{
+    return put(j, parent, key, item);
+}
+
+void ljgap_ans_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx)
+{
+    put_num(j, parent, key, v, label, idx);
+}
+
+cJSON *ljgap_ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
+                      size_t stride, const char *label)
+{
+    return put_nums(j, parent, key, x, n, stride, label);
 }

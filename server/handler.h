@@ -41,7 +41,7 @@ void ljgap_handler_set_limits(const ljgap_limits *l);
 
 #define LJGAP_TOPO_POINTS_DEFAULT (1L << 23) /* 8 Mi heights: a 2896² map, 64 MiB of doubles */
 
-/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd".
+/* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd", "psd/combine".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
@@ -90,6 +90,15 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
                        const char *body, size_t len, const ljgap_call *call, ljgap_reply *out);
 /* Does this endpoint take a text upload ("psd")? */
 int ljgap_handler_has_text(const char *endpoint);
+
+/* ---- ljgap combine: the body of POST /v1/psd/combine from documents ----
+ * Each of docs[0..n) (lens[i] bytes of JSON) is a /v1/psd answer or a psd object: an answer's
+ * psd object when it has P_err, else the answer's bins (k, P, error.P) within its fit's band
+ * (k_min to k_max; all of them without a fit) with its psd object's tail; a psd object
+ * ({k, P, P_err, ...}) as it is. per_decade > 0 adds points_per_decade. Returns the body
+ * (malloc'd; free it), or NULL with the reason in err. */
+char *ljgap_combine_body(const char *const *docs, const size_t *lens, size_t n, double per_decade,
+                         char *err, size_t errlen);
 
 /* ---- simulations: the numerical model (ljgap_sim.h) as a job ----
  * Not an endpoint of ljgap_handle: a run takes minutes, so the daemon queues it (jobs.h) and

@@ -1253,6 +1253,10 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
         parse_psd_request(e, root, lim, 0, rq);
         return e->n;
     }
+    if (ep == LJGAP_EP_COMBINE) {
+        ljgap_combine_parse(e, root, rq);
+        return e->n;
+    }
     only_fields(e, root, "", common_fields, extra[ep]);
     parse_common(e, root, lim, rq);
     parse_material(e, root, ep == LJGAP_EP_CONTACT, rq);
@@ -1266,6 +1270,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     case LJGAP_EP_ADHESION:
     case LJGAP_EP_SIMULATION: /* parsed above */
     case LJGAP_EP_PSD:
+    case LJGAP_EP_COMBINE:
         break;
     case LJGAP_EP_TRACTION:
         parse_traction(e, root, lim, rq);
@@ -1294,6 +1299,8 @@ void ljgap_request_free(ljgap_request *rq)
     free(rq->x);
     free(rq->topo.h);
     rq->psd.k = rq->psd.P = rq->psd.P_err = rq->x = rq->topo.h = NULL;
+    ljgap_combine_spec_free(rq->combine);
+    rq->combine = NULL;
 }
 
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)
@@ -1328,4 +1335,29 @@ void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec 
         spec->k1 = mat ? ljgap_units_k_to_dimless(mat, x) : x;
         break;
     }
+}
+
+/* ---- the validators, for requests parsed in their own files (request.h) ---- */
+
+void ljgap_v_only_fields(ljgap_verr *e, const cJSON *obj, const char *base,
+                         const char *const *names)
+{
+    only_fields(e, obj, base, names, NULL);
+}
+
+const cJSON *ljgap_v_required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+                              const char *what)
+{
+    return required(e, obj, base, name, what);
+}
+
+int ljgap_v_num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+{
+    return num(e, it, ptr, x);
+}
+
+size_t ljgap_v_array(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+                     const char *what)
+{
+    return array_of(e, it, ptr, min, max, what);
 }

@@ -26,7 +26,8 @@ typedef enum {
     LJGAP_EP_SWEEP,
     LJGAP_EP_CONTACT,
     LJGAP_EP_SIMULATION, /* a numerical-model job (ljgap_sim.h), not a synchronous endpoint */
-    LJGAP_EP_PSD         /* the PSD of a height map (ljgap_topo.h); its text form too */
+    LJGAP_EP_PSD,        /* the PSD of a height map (ljgap_topo.h); its text form too */
+    LJGAP_EP_COMBINE     /* several measured PSDs as one (ljgap_combine.h, combine.c) */
 } ljgap_endpoint;
 
 /* Which PSD field a sweep varies. */
@@ -89,6 +90,7 @@ typedef struct {
                             * for what is not given); g_ave points in x */
     ljgap_topo_spec topo;  /* psd: the height map */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
+    struct ljgap_combine_spec *combine; /* psd/combine: the PSDs (owned, combine.c) */
 } ljgap_request;
 
 /* Collected validation problems. */
@@ -139,5 +141,24 @@ size_t ljgap_utf8_span(const char *s, size_t n);
 /* Records one problem at pointer ptr (printf-style detail). */
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+
+/* ---- the validators above, for requests parsed in their own files (combine.c) ----
+ * Each records its problems in e as the request's own parsers do. */
+/* Every member of obj (pointer base) must be named in names (NULL-terminated), once. */
+void ljgap_v_only_fields(ljgap_verr *e, const cJSON *obj, const char *base,
+                         const char *const *names);
+/* obj[name], recording "missing" at base/name (what: what the field is) when absent. */
+const cJSON *ljgap_v_required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+                              const char *what);
+/* A finite JSON number at it (pointer ptr) into *x; 0 after recording why not. */
+int ljgap_v_num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x);
+/* A JSON array of min..max entries; its size, or 0 after recording why not. */
+size_t ljgap_v_array(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+                     const char *what);
+
+/* ---- combine.c: POST /v1/psd/combine ---- */
+/* Validates root's {"psds": [...], "points_per_decade"} into rq->combine. */
+void ljgap_combine_parse(ljgap_verr *e, const cJSON *root, ljgap_request *rq);
+void ljgap_combine_spec_free(struct ljgap_combine_spec *s); /* NULL is fine */
 
 #endif

@@ -887,7 +887,7 @@
     if (typeof LJTopo !== "undefined") {
       LJTopo.init({
         panels, post, el, val, fmt, errFmt, clearErrors, placeProblem, showFieldError, showSeries,
-        resetPanel, materialObject, summaryTable, metaLine, warnings, setBusy, setIdle,
+        resetPanel, materialObject, summaryTable, metaLine, warnings, setBusy, setIdle, download,
       });
     }
   }

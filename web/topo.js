@@ -10,6 +10,13 @@
  * between k1 and k2 (log-log interpolated at both ends) as a table PSD, with the fitted power
  * law as its tail when k2 is empty (∞), sent with the form's material and "units":"SI"; the
  * server checks k1 > k̃0/χ and says so beside k1 otherwise.
+ *
+ * Several files (one surface measured at several scales, issue 25): each gets its own dx in a
+ * small table, goes to /v1/psd on its own (without the material: the whole measured band), and
+ * their psd objects (the answer's own when it has P_err, else its bins within its fit's band
+ * with error.P, as `ljgap combine` takes them) go to POST /v1/psd/combine. The plot shows each
+ * measurement's bins, the combination with its error band (P ± P_err) and its fit; the
+ * combination is what k1, k2 and the adhesion then use, and "Combined PSD as CSV" exports it.
  */
 "use strict";
 
@@ -18,16 +25,30 @@ const LJTopo = (() => {
   let api = null; /* app.js's helpers */
   let psd = null; /* the last 200 answer of /v1/psd */
   let chart = null; /* its uPlot */
+  let measured = []; /* several files: [{name, answer}] of /v1/psd, psd the combination */
+  const COLORS = ["#1f5fbf", "#2e933c", "#8e44ad", "#e67e22", "#16a085", "#7f8c8d", "#c0392b", "#2c3e50"];
 
   /* The query of the text upload: dx, dy, periodic and the material, as the form has them. */
-  function query() {
+  function query(dx) {
     const q = new URLSearchParams();
-    q.set("dx", $("topo-dx").value.trim());
-    if ($("topo-dy").value.trim() !== "") q.set("dy", $("topo-dy").value.trim());
+    q.set("dx", dx === undefined ? $("topo-dx").value.trim() : dx);
+    if (dx === undefined && $("topo-dy").value.trim() !== "") q.set("dy", $("topo-dy").value.trim());
     if ($("topo-periodic").checked) q.set("periodic", "true");
-    const m = api.materialObject();
+    const m = dx === undefined ? api.materialObject() : null; /* several maps: the whole band */
     for (const [k, v] of Object.entries(m || {})) if (v !== undefined && v !== null) q.set(k, String(v));
     return q.toString();
+  }
+
+  /* Several files: a dx field for each (the card's dx to start with). */
+  function listFiles() {
+    const files = [...$("topo-file").files];
+    const box = $("topo-files");
+    box.hidden = files.length < 2;
+    if (files.length < 2) return box.replaceChildren();
+    const rows = files.map((f, i) =>
+      api.el("label", { class: "topo-file-dx" }, `dx of ${f.name} (m) `,
+        api.el("input", { id: `topo-dx-${i}`, class: "short", type: "text", inputmode: "decimal", value: $("topo-dx").value.trim() })));
+    box.replaceChildren(api.el("div", { class: "meta" }, `${files.length} measurements of one surface: one PSD of all (dy = dx for each; the material is not used for them)`), ...rows);
   }
 
   /* The power law of the fit over the band binned. */
@@ -43,23 +64,27 @@ const LJTopo = (() => {
   };
 
   function draw() {
+    if (measured.length) return drawCombined();
     const a = psd;
     const p = api.panels.topo;
     const series = [{ name: "P (bins, m⁴)", x: a.k, y: a.P, err: a.error.P, color: "#1f5fbf", points: true }];
     const f = fitLine(a);
     if (f) series.push({ name: `fit: D = ${api.fmt(a.fit.D, 4)} ± ${api.errFmt(a.error.fit.D)}`, x: f.k, y: f.P, color: "#d1495b", dash: [6, 4] });
-    const marks = [];
+    const marks = a.domain ? [{ type: "vline", x: a.domain.k0, label: "k0/χ", color: "#d1495b", dash: [2, 3], row: 1 }] : [];
+    plot(series, a.k.concat(a.domain ? [a.domain.k0] : []), marks, p.answers);
+  }
+
+  /* The panel's log-log chart of series over the k in xs, with marks and k1, k2; a click on it
+   * sets k1 or k2 (the selector says which). */
+  function plot(series, xs, marks, answers) {
     const k1 = kOf("topo-k1");
     const k2 = kOf("topo-k2");
     if (k1 !== null) marks.push({ type: "vline", x: k1, label: "k1", color: "#2e933c" });
     if (k2 !== null) marks.push({ type: "vline", x: k2, label: "k2", color: "#2e933c" });
-    if (a.domain) marks.push({ type: "vline", x: a.domain.k0, label: "k0/χ", color: "#d1495b", dash: [2, 3], row: 1 });
-    const xs = a.k.concat(a.domain ? [a.domain.k0] : []);
     chart = api.showSeries("topo", series, {
       xLabel: "k (1/m)", xName: "k", yLabel: "P (m⁴)", xLog: true, yLog: true,
       xRange: [Math.min(...xs) / 1.5, Math.max(...xs) * 1.5], marks,
-    }, p.answers);
-    /* a click on the plot sets k1 or k2 (the selector says which) */
+    }, answers);
     chart.over.addEventListener("click", (e) => {
       const k = chart.posToVal(e.offsetX, "x");
       if (!(k > 0)) return;
@@ -89,9 +114,35 @@ const LJTopo = (() => {
   /* The height map was answered with a problem: beside the fields, and in the readout. */
   function refused(status, json) {
     psd = null;
+    measured = [];
     const loose = api.placeProblem(json, "topo");
     $("readout-topo").replaceChildren(api.el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`), ...loose.map((t) => api.el("div", { class: "problem" }, t)));
     api.setIdle("The height map was refused: see the highlighted fields.", true);
+  }
+
+  /* POSTs text to endpoint (opts as api.post takes them) and records the answer in panel p:
+   * the 200 answer, or null after showing why (who, when given, starts a problem's detail). */
+  async function ask(p, endpoint, text, opts, who) {
+    let res;
+    try {
+      res = await api.post(endpoint, text, undefined, opts);
+    } catch (e) {
+      api.setIdle(`Request failed: ${e.message}`, true);
+      return null;
+    }
+    p.answers.push(res.json);
+    if (res.status === 200) return res.json;
+    const j = res.json || {};
+    refused(res.status, who ? { ...j, detail: `${who}: ${j.detail || ""}` } : j);
+    return null;
+  }
+
+  /* One height map f to /v1/psd as text with the query q (ask's answer); the export records
+   * the upload (its file and query), not the matrix itself. */
+  async function upload(p, f, q, label, who) {
+    const text = await f.text();
+    p.requests.push({ endpoint: `psd?${q}`, text: JSON.stringify({ file: f.name, bytes: text.length, content_type: "text/plain", query: q }), label });
+    return ask(p, "psd", text, { contentType: "text/plain", query: q }, who);
   }
 
   async function computePsd() {
@@ -101,32 +152,105 @@ const LJTopo = (() => {
       api.showFieldError("topo-file", "choose a file: a matrix of heights in m, one row a line");
       return;
     }
-    const text = await f.text();
-    const q = query();
+    if ($("topo-file").files.length > 1) return computeCombined([...$("topo-file").files]);
+    measured = [];
+    $("topo-combined").hidden = true;
     const p = api.resetPanel("topo");
-    /* the export records the upload (its file and query), not the matrix itself */
-    p.requests.push({ endpoint: `psd?${q}`, text: JSON.stringify({ file: f.name, bytes: text.length, content_type: "text/plain", query: q }), label: "psd" });
     $("card-topo").hidden = false;
     api.setBusy(`psd of ${f.name}`);
-    let res;
-    try {
-      res = await api.post("psd", text, undefined, { contentType: "text/plain", query: q });
-    } catch (e) {
-      api.setIdle(`Request failed: ${e.message}`, true);
-      return;
-    }
-    p.answers.push(res.json);
-    if (res.status !== 200) {
-      refused(res.status, res.json || {});
-      return;
-    }
-    psd = res.json;
+    const a = await upload(p, f, query(), "psd");
+    if (!a) return;
+    psd = a;
     $("topo-k1").value = api.fmt(psd.domain ? psd.domain.k1 : psd.k[0], 6);
     $("topo-k2").value = "";
     readout(psd);
     draw();
     $("readout-topo-adhesion").textContent = "Pick k1 and k2 (empty: ∞) and compute the adhesion of the spectrum between them.";
     api.setIdle(`PSD of ${f.name}: ${psd.k.length} bins.`);
+  }
+
+  /* The psd object of a /v1/psd answer for the combination (as ljgap_combine_body makes it). */
+  function psdObject(a) {
+    if (a.psd && a.psd.P_err) return a.psd;
+    const lo = a.fit ? a.fit.k_min : 0;
+    const hi = a.fit ? a.fit.k_max : Infinity;
+    const o = { kind: "table", k: [], P: [], P_err: [] };
+    a.k.forEach((k, i) => {
+      if (k < lo * (1 - 1e-9) || k > hi * (1 + 1e-9)) return;
+      o.k.push(k), o.P.push(a.P[i]), o.P_err.push(a.error.P[i]);
+    });
+    if (a.psd && a.psd.tail) o.tail = a.psd.tail;
+    return o;
+  }
+
+  function drawCombined() {
+    const c = psd;
+    const series = measured.map((m, i) => ({ name: `${m.name} (bins, m⁴)`, x: m.answer.k, y: m.answer.P, err: m.answer.error.P, color: COLORS[i % COLORS.length], points: true }));
+    series.push({ name: "combined P (m⁴)", x: c.k, y: c.P, err: c.error.P, color: "#111" });
+    series.push({ name: "combined P + P_err", x: c.k, y: c.P.map((p, i) => p + c.error.P[i]), color: "#999", dash: [3, 3] });
+    series.push({ name: "combined P − P_err", x: c.k, y: c.P.map((p, i) => (p > c.error.P[i] ? p - c.error.P[i] : null)), color: "#999", dash: [3, 3] });
+    const f = fitLine(c);
+    if (f) series.push({ name: `fit: D = ${api.fmt(c.fit.D, 4)} ± ${api.errFmt(c.error.fit.D)}`, x: f.k, y: f.P, color: "#d1495b", dash: [6, 4] });
+    const marks = c.gaps.map((g) => ({ type: "vline", x: Math.sqrt(g.k_min * g.k_max), label: "gap", color: "#d1495b", dash: [2, 3], row: 1 }));
+    plot(series, measured.flatMap((m) => [m.answer.k[0], m.answer.k[m.answer.k.length - 1]]), marks, api.panels.topo.answers);
+  }
+
+  function readoutCombined(c) {
+    const t = api.el("table", {});
+    const row = (name, v, err, unit) => t.append(api.el("tr", {}, api.el("th", {}, name), api.el("td", {}, `${api.fmt(v, 5)}${unit ? ` ${unit}` : ""}`), api.el("td", {}, err === undefined ? "" : `± ${api.errFmt(err)}`)));
+    if (c.fit) {
+      row("D (H = 3 − D)", c.fit.D, c.error.fit.D);
+      row("C", c.fit.C, c.error.fit.C, `m^${api.fmt(2 * c.fit.D - 4, 3)}`);
+      row("fit band", c.fit.k_min, undefined, `… ${api.fmt(c.fit.k_max, 4)} 1/m (${c.fit.points} points, χ²_red ${api.fmt(c.fit.chi2_red, 3)})`);
+    }
+    const notes = measured.map((m, i) => `${m.name}: k = ${api.fmt(c.sources[i].k_min, 4)} … ${api.fmt(c.sources[i].k_max, 4)} 1/m, ${c.sources[i].points} points of the combination`);
+    const ag = c.agreement;
+    notes.push(ag.dof ? `overlap: χ² = ${api.fmt(ag.chi2, 3)} for ${ag.dof} degrees of freedom (p = ${api.fmt(ag.p, 2)}); ${ag.inflated} errors inflated` : "the measurements do not overlap");
+    notes.push(`combined: ${c.k.length} points, ${api.fmt(c.k[0], 4)} … ${api.fmt(c.k[c.k.length - 1], 4)} 1/m; tail ${c.psd.tail ? `k^${api.fmt(c.psd.tail.exponent, 4)} from ${c.tail_from}` : "none"}`);
+    $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), api.metaLine(c), ...api.warnings(c));
+  }
+
+  /* The combination as CSV with units. */
+  function combinedCSV() {
+    const c = psd;
+    const lines = [
+      `# ljgap psd/combine: ${measured.map((m) => m.name).join(", ")}`,
+      `# the project's convention: k angular, 2 pi int k P dk = h_rms^2; fit D = ${c.fit ? c.fit.D : ""} +- ${c.fit ? c.error.fit.D : ""}`,
+      "k [1/m],P [m^4],P_err [m^4],inputs",
+    ];
+    c.k.forEach((k, i) => lines.push([k, c.P[i], c.error.P[i], c.inputs[i]].join(",")));
+    return lines.join("\n") + "\n";
+  }
+
+  /* Several files: each one's PSD, then their combination. */
+  async function computeCombined(files) {
+    const p = api.resetPanel("topo");
+    measured = [];
+    psd = null;
+    $("card-topo").hidden = false;
+    $("topo-combined").hidden = true;
+    const answers = [];
+    for (const [i, f] of files.entries()) {
+      const dx = $(`topo-dx-${i}`) ? $(`topo-dx-${i}`).value.trim() : $("topo-dx").value.trim();
+      api.setBusy(`psd of ${f.name} (${i + 1} of ${files.length})`);
+      const a = await upload(p, f, query(dx), `psd ${f.name}`, f.name);
+      if (!a) return;
+      answers.push({ name: f.name, answer: a });
+    }
+    const body = JSON.stringify({ psds: answers.map((m) => psdObject(m.answer)) });
+    p.requests.push({ endpoint: "psd/combine", text: body, label: "psd/combine" });
+    api.setBusy(`combining ${files.length} PSDs`);
+    const c = await ask(p, "psd/combine", body, {});
+    if (!c) return;
+    measured = answers;
+    psd = c;
+    $("topo-k1").value = api.fmt(psd.k[0], 6);
+    $("topo-k2").value = "";
+    readoutCombined(psd);
+    draw();
+    $("topo-combined").hidden = false;
+    $("readout-topo-adhesion").textContent = "Pick k1 and k2 (empty: ∞) and compute the adhesion of the combined spectrum between them.";
+    api.setIdle(`Combined PSD of ${files.length} measurements: ${psd.k.length} points.`);
   }
 
   /* log-log interpolation of the bins at k (inside them) */
@@ -144,7 +268,8 @@ const LJTopo = (() => {
     const last = a.k[a.k.length - 1];
     if (k1 > a.k[0] && k1 < last) k.push(k1), P.push(at(a, k1));
     a.k.forEach((x, i) => {
-      if (x >= k1 && (k2 === null || x <= k2)) k.push(x), P.push(a.P[i]);
+      /* (k1 on a bin is that bin once) */
+      if (x >= k1 && (k2 === null || x <= k2) && !(k.length && x <= k[k.length - 1])) k.push(x), P.push(a.P[i]);
     });
     if (k2 !== null && k2 > a.k[0] && k2 < last && k[k.length - 1] < k2) k.push(k2), P.push(at(a, k2));
     const out = { kind: "table", k, P };
@@ -200,8 +325,12 @@ const LJTopo = (() => {
     api = helpers;
     $("topo-compute").addEventListener("click", computePsd);
     $("topo-adhesion").addEventListener("click", computeAdhesion);
+    $("topo-file").addEventListener("change", listFiles);
+    $("topo-combined-csv").addEventListener("click", () => {
+      if (psd && measured.length) api.download("ljgap-topo-combined.csv", new Blob([combinedCSV()], { type: "text/csv" }));
+    });
     for (const id of ["topo-k1", "topo-k2"]) $(id).addEventListener("change", () => psd && draw());
   }
 
-  return { init, spectrum, query, refused };
+  return { init, spectrum, query, refused, psdObject, combinedCSV };
 })();

@@ -165,6 +165,35 @@ check "options for an endpoint without a text form are a usage error (2)" rc_is 
 run psd --dx 1e-8 "$tmp/no-such-file"
 check "psd: an unreadable file exits 2" rc_is 2
 
+# ---- combine: several PSDs as one (POST /v1/psd/combine) ----
+# a second map of the same law at half the pixel (its band reaches twice as far)
+awk 'BEGIN { for (j = 0; j < 64; j++) { for (i = 0; i < 64; i++)
+    printf "%s%.17g", i ? " " : "", 1e-9 * (sin(0.21 * i + 0.05 * j * j) + 0.3 * cos(0.9 * i * j));
+    printf "\n" } }' >"$tmp/map2.txt"
+"$LJGAP" psd --dx 5e-9 "$tmp/map2.txt" >"$tmp/psd2.json"
+: >"$tmp/in"
+run combine "$tmp/psd-text.json" "$tmp/psd2.json"
+check "combine of two /v1/psd answers exits 0 with one line" eval 'rc_is 0 && one_line'
+check "combine: k, P, errors, two sources, a psd table with P_err" jq_true \
+    '(.k | length) > 5 and (.P | length) == (.k | length) and (.error.P | length) == (.k | length)
+     and (.sources | length) == 2 and (.psd.P_err | length) == (.k | length)
+     and .meta.method == "inverse-variance"'
+jq -c '{k: .k, P: .P, P_err: .error.P}' "$tmp/psd2.json" >"$tmp/obj2.json"
+run combine --points-per-decade 5 "$tmp/psd-text.json" "$tmp/obj2.json"
+check "combine: a psd object and an answer, --points-per-decade" jq_true \
+    '.k | length > 2 and (.[1] / .[0] - 1.5849 | fabs) < 1e-3'
+run combine --request "$tmp/psd-text.json" "$tmp/obj2.json"
+check "combine --request prints the request" jq_true '(.psds | length) == 2 and (.psds[1].P_err | length) > 2'
+jq -c '.P_err[1] = -1' "$tmp/obj2.json" >"$tmp/bad2.json"
+run combine "$tmp/psd-text.json" "$tmp/bad2.json"
+check "combine: a negative P_err is exit 1, 422 at /psds/1/P_err/1" eval 'rc_is 1 &&
+    jq_true ".status == 422 and [.errors[].pointer] == [\"/psds/1/P_err/1\"]"'
+run combine "$tmp/psd-text.json"
+check "combine of one file is a usage error (2)" rc_is 2
+echo '{"a":1}' >"$tmp/junk.json"
+run combine "$tmp/psd-text.json" "$tmp/junk.json"
+check "combine: a file that is no PSD exits 2" rc_is 2
+
 # ---- simulations: one numerical-model job in the foreground ----
 sim='"psd":{"kind":"power","D":2.2,"k1":1,"k2":8,"m0":0.1},"n":32,"realizations":2'
 echo "{$sim,\"g_ave\":[2,3]}" >"$tmp/in"

@@ -83,6 +83,12 @@ const post = (path, body, headers = {}) => call("POST", path, { headers: { ...JS
 
 const PSD = { kind: "power", D: 2.5, k1: 1, m0: 0.5 };
 const MAT = { E_star: 1e9, dgamma: 0.05, epsilon: 3e-10 };
+// a measured PSD table of P = 1e-30 k^-3.4 (SI), n points at 10 a decade from k0, 10 % errors
+const TABLE = (k0, n) => {
+  const k = Array.from({ length: n }, (_, i) => k0 * 10 ** (i / 10));
+  const P = k.map((x, i) => 1e-30 * x ** -3.4 * (1 + 0.05 * Math.sin(3 * i)));
+  return { kind: "table", k, P, P_err: P.map((x) => 0.1 * x) };
+};
 const heights = (nx, ny) =>
   Array.from({ length: ny }, (_, j) => Array.from({ length: nx }, (_, i) => 1e-9 * Math.sin(0.7 * i + 1.3 * j) + 3e-10 * Math.cos(0.31 * i * j)));
 const compute = {
@@ -107,6 +113,10 @@ const compute = {
     ["a height map", { topography: { heights: heights(16, 16), dx: 1e-8 } }],
     ["a profile with a material", { topography: { heights: heights(64, 1), dx: 1e-8 }, material: MAT }],
     ["a periodic map with a material", { topography: { heights: heights(32, 32), dx: 1e-9, periodic: true }, material: MAT }],
+  ],
+  "/v1/psd/combine": [
+    ["two overlapping tables", { psds: [TABLE(1e5, 21), { ...TABLE(1e6, 21), tail: { exponent: -3.4, exponent_err: 0.05 } }] }],
+    ["three with a gap, 5 points a decade", { psds: [TABLE(1e5, 6), TABLE(1e6, 11), TABLE(1e8, 6)], points_per_decade: 5 }],
   ],
 };
 const hasCsv = new Set(["/v1/traction", "/v1/pdf", "/v1/sweep"]);

@@ -1,10 +1,10 @@
 /* fuzz_handler.c -- libFuzzer target on ljgap_handle_call, the one request handler.
  *
  * An input is "ENDPOINT\nBODY" or "ENDPOINT\tACCEPT\nBODY": the first line names the endpoint
- * (adhesion, traction, pdf, sweep, contact, psd, or anything else for a 404; "simulations" goes
- * through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run, and then, when there
- * is an Accept, its result through ljgap_sim_status_answer as a finished job's status;
- * "text:NAME?QUERY" is a text upload, ljgap_handle_text with the query split at '&' and '='
+ * (adhesion, traction, pdf, sweep, contact, psd, psd/combine, or anything else for a 404;
+ * "simulations" goes through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run,
+ * and then, when there is an Accept, its result through ljgap_sim_status_answer as a finished job's
+ * status; "text:NAME?QUERY" is a text upload, ljgap_handle_text with the query split at '&' and '='
  * into parameters, as the daemon hands them over after decoding), and after a tab the value of
  * the Accept header; the rest is the request body, handed over in a buffer of exactly its
  * length (no NUL after it), so that any read past the end is caught by AddressSanitizer. An

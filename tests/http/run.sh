@@ -80,7 +80,8 @@ check "/version matches LJGAP_VERSION ($version)" json --arg v "$version" '.vers
 req GET /openapi.json
 check "GET /openapi.json: OpenAPI 3 JSON" \
     eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
-for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations /v1/psd; do
+for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations /v1/psd \
+    /v1/psd/combine; do
     check "openapi: POST $p with 400, 413, 415, 422 and 503 problems" \
         json --arg p "$p" '.paths[$p].post.responses | has("400") and has("413") and has("415")
             and has("422") and has("503")'
@@ -198,6 +199,32 @@ req POST "/v1/psd?dx=1e-8" -H 'Content-Type: text/plain' --data-binary @"$tmp/hu
 check "POST /v1/psd text of 64 MiB + 1 byte: 413 naming 67108864 bytes" eval 'problem 413 &&
     json ".detail | test(\"67108864\")"'
 rm -f "$tmp/huge.txt" "$tmp/big.txt"
+
+# ---- psd/combine: two measurements as one ----
+jq -c '{k: .k, P: .P, P_err: .error.P}' "$tmp/psd-text.json" >"$tmp/obj1.json"
+jq -c '{k: (.k | map(. * 4)), P: .P, P_err: .error.P}' "$tmp/psd-text.json" >"$tmp/obj2.json"
+jq -c -n --slurpfile a "$tmp/obj1.json" --slurpfile b "$tmp/obj2.json" '{psds: [$a[0], $b[0]]}' \
+    >"$tmp/combine.json"
+req POST /v1/psd/combine -H 'Content-Type: application/json' --data-binary @"$tmp/combine.json"
+check "POST /v1/psd/combine: 200 with k, P, errors, sources, a psd table with P_err" eval \
+    '[ "$STATUS" = 200 ] && json "(.k | length) > 5 and (.error.P | length) == (.k | length)
+     and (.sources | length) == 2 and (.psd.P_err | length) == (.k | length)
+     and .meta.method == \"inverse-variance\" and .meta.cached == false"'
+req POST /v1/psd/combine -H 'Content-Type: application/json' --data-binary @"$tmp/combine.json"
+check "POST /v1/psd/combine again: from the cache" json '.meta.cached == true'
+jq -c '.psds[1].P_err[3] = -1 | .psds += [{k: [1, 2]}]' "$tmp/combine.json" >"$tmp/combine-bad.json"
+req POST /v1/psd/combine -H 'Content-Type: application/json' --data-binary @"$tmp/combine-bad.json"
+check "POST /v1/psd/combine bad: 422 at /psds/1/P_err/3, /psds/2/P and /psds/2/P_err" eval \
+    'problem 422 && json "[.errors[].pointer] | sort == [\"/psds/1/P_err/3\", \"/psds/2/P\", \"/psds/2/P_err\"]"'
+jq -c '.psds[1].k |= map(. * 1000)' "$tmp/combine.json" >"$tmp/combine-gap.json"
+req POST /v1/psd/combine -H 'Content-Type: application/json' --data-binary @"$tmp/combine-gap.json"
+check "POST /v1/psd/combine with a gap: 200, the gap in gaps and in a warning" eval \
+    '[ "$STATUS" = 200 ] && json "(.gaps | length) == 1
+     and any(.meta.warnings[]; test(\"no measurement covers k = \"))"'
+req GET /v1/psd/combine
+check "GET /v1/psd/combine: 405 with Allow: POST" eval 'problem 405'
+req POST /v1/psd/combine -H 'Content-Type: text/plain' --data-binary @"$tmp/map.txt"
+check "POST /v1/psd/combine text/plain: 415 (JSON only)" problem 415
 
 # ---- problems ----
 post adhesion '{"psd":'

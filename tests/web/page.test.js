@@ -6,7 +6,8 @@
 // (canvas pixels inked, readouts filled, numbers against theory.md §4's reference values); hover
 // readouts; a 422 problem lands beside the field its pointer names; exports (CSV, JSON, PNG,
 // "copy as curl" re-run with curl gives the same numbers); a measured topography: upload, its PSD
-// and fit, k1/k2 picked on the plot, the adhesion of the spectrum; not a single console error
+// and fit, k1/k2 picked on the plot, the adhesion of the spectrum; several maps combined (each
+// one's PSD, the combination with its error band, its CSV); not a single console error
 // (the icon included); no request leaves the local server. Leaves screenshots in
 // $BUILD/web-screenshot*.png.
 // Chromium logs every 4xx answer the page fetches as a console error ("Failed to load
@@ -381,6 +382,62 @@ test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on 
   assert.match(await page.textContent("#status-text"), /refused/);
   assert.match(await page.textContent('.err[data-for="topo-file"]'), /line 2, column 3/);
   await page.fill("#E_star", "1e9");
+});
+
+test("several measured maps: each one's PSD, their combination with its error band, the CSV", async () => {
+  // one surface (bench/topo gen's law, D = 2.3) measured at 10 nm and 2 nm pixels, 128² each
+  const coarse = path.join(userDir, "coarse-10nm.txt");
+  const fine = path.join(userDir, "fine-2nm.txt");
+  execFileSync(path.join(BUILD, "bench/topo"), ["gen", coarse, "128"]);
+  execFileSync(path.join(BUILD, "bench/topo"), ["gen", fine, "128", "2e-9"]);
+  await page.uncheck("#use-material");
+  await page.setInputFiles("#topo-file", [coarse, fine]);
+  assert.ok(await page.isVisible("#topo-files"));
+  await page.fill("#topo-dx-0", "1e-8");
+  await page.fill("#topo-dx-1", "2e-9");
+  await page.evaluate(() => (document.getElementById("status-text").textContent = "")); // the last test ended refused
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^Combined PSD|refused|failed/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent("#status-text"), /^Combined PSD of 2 measurements: \d+ points/);
+  assert.ok((await inked("plot-topo")) > 500, "combined PSD canvas is blank");
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")));
+  const names = fig.series.map((x) => x.name);
+  assert.deepEqual(names.slice(0, 5), ["coarse-10nm.txt (bins, m⁴)", "fine-2nm.txt (bins, m⁴)", "combined P (m⁴)", "combined P + P_err", "combined P − P_err"]);
+  assert.match(names[5], /^fit: D = /);
+  const rows = await page.$$eval("#readout-topo table tr", (r) => r.map((x) => [...x.children].map((c) => c.textContent)));
+  const D = Number(Object.fromEntries(rows.map((r) => [r[0], r.slice(1)]))["D (H = 3 − D)"][0]);
+  assert.ok(Math.abs(D - 2.3) < 0.05, `combined D ${D}`);
+  const ro = await page.textContent("#readout-topo");
+  assert.match(ro, /coarse-10nm\.txt: k = .* 1\/m, \d+ points of the combination/);
+  assert.match(ro, /overlap: χ² = /);
+  const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  assert.deepEqual(json.requests.map((r) => r.label), ["psd coarse-10nm.txt", "psd fine-2nm.txt", "psd/combine"]);
+  assert.equal(json.requests[2].body.psds.length, 2);
+  assert.ok(json.requests[2].body.psds.every((x) => x.P_err.length === x.k.length));
+  // the combination's CSV, with units
+  const [dl] = await Promise.all([page.waitForEvent("download"), page.click("#topo-combined-csv")]);
+  const csv = fs.readFileSync(await dl.path(), "utf8").split("\n");
+  assert.equal(dl.suggestedFilename(), "ljgap-topo-combined.csv");
+  assert.ok(csv.includes("k [1/m],P [m^4],P_err [m^4],inputs"));
+  const answer = json.answers[2];
+  assert.equal(csv.filter((l) => /^\d/.test(l)).length, answer.k.length);
+  // the adhesion of the combined spectrum takes its points
+  await page.check("#use-material");
+  await page.fill("#E_star", "1e11");
+  await page.fill("#topo-k1", String(answer.k[2]));
+  await page.click("#topo-adhesion");
+  await page.waitForFunction(() => /^Adhesion of the measured|refused/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /Δγeff\/Δγ = /);
+  await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-combine.png"), fullPage: false });
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-combine-phone.png"), fullPage: false });
+  await page.setViewportSize({ width: 1280, height: 900 });
+  await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-combine-1280.png"), fullPage: false });
+  await page.fill("#E_star", "1e9");
+  await page.uncheck("#use-material");
 });
 
 test("the icon: /favicon.svg linked and served, /favicon.ico served (no 404)", async () => {

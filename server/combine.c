@@ -1,0 +1,373 @@
+/* combine.c -- POST /v1/psd/combine: several measured PSDs of one surface as one (issue 25).
+ *
+ * Request: {"psds": [psd, psd, ...], "points_per_decade": 10}, each psd a table as /v1/psd
+ * answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
+ * "exponent_err":e}} (kind and tail optional; P_err required: the weights need it). Every bad
+ * value is a 422 problem at its pointer (/psds/2/P_err/7). The core (ljgap_combine.h) does the
+ * work; the answer (docs/api.md, docs/topography.md):
+ *   k, P, inputs (how many psds cover each point), sources [{k_min, k_max, points}], gaps
+ *   [{k_min, k_max}], agreement {chi2, dof, p, inflated}, fit {D, H, C, k_min, k_max, points,
+ *   chi2_red, corr_lnC_D} or null, tail_from ("psds/I", "fit" or null), psd {kind, k, P, P_err,
+ *   tail {exponent, exponent_err}}, error {P, chi2 [per point], fit {D, H, C}}, meta.
+ * A combination whose bands hold fewer than two grid points is a 422 outside-model problem at
+ * /psds. No material: the answer is in SI as the inputs are; /v1/psd gives the theory's domain.
+ */
+#include "answer.h"
+#include "ljgap_combine.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TABLE_MAX 10000 /* points of one psd, as a table psd anywhere */
+#define PTR 64
+
+struct ljgap_combine_spec {
+    size_t m;
+    double per_decade;
+    ljgap_combine_input in[LJGAP_COMBINE_MAX];
+    double *col[LJGAP_COMBINE_MAX][3]; /* owned k, P, P_err of each */
+};
+
+void ljgap_combine_spec_free(struct ljgap_combine_spec *s)
+{
+    if (!s) return;
+    for (size_t i = 0; i < LJGAP_COMBINE_MAX; i++)
+        for (int c = 0; c < 3; c++)
+            free(s->col[i][c]);
+    free(s);
+}
+
+static const char *const combine_fields[] = {"psds", "points_per_decade", NULL};
+static const char *const psd_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
+static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
+static const char *const col_names[3] = {"k", "P", "P_err"};
+
+/* Column c of psds[i] (n numbers at base/NAME/j) into a new array; NULL when any is bad. P: the
+ * P column, for P_err's (NULL when it was bad). */
+static double *column(ljgap_verr *e, const cJSON *arr, const char *base, int c, size_t n,
+                      const double *P)
+{
+    double *x = malloc(n * sizeof *x);
+    const cJSON *it;
+    char ptr[PTR];
+    size_t j = 0, bad = 0;
+    if (!x) {
+        e->oom = 1;
+        return NULL;
+    }
+    cJSON_ArrayForEach(it, arr)
+    {
+        snprintf(ptr, sizeof ptr, "%s/%s/%zu", base, col_names[c], j);
+        if (!ljgap_v_num(e, it, ptr, &x[j])) {
+            x[j] = NAN; /* read by the next one's checks */
+            bad++;
+        } else if (c < 2 && !(x[j] > 0)) {
+            ljgap_verr_add(e, ptr, "%s must be positive (got %g)", col_names[c], x[j]);
+            bad++;
+        } else if (c == 2 && !(x[j] >= 0)) {
+            ljgap_verr_add(e, ptr, "P_err must be zero or positive (got %g)", x[j]);
+            bad++;
+        } else if (c == 2 && P && P[j] > 0 && !(x[j] / P[j] <= LJGAP_COMBINE_REL_ERR_MAX)) {
+            ljgap_verr_add(e, ptr, "P_err = %g is more than %g times P = %g: no information", x[j],
+                           LJGAP_COMBINE_REL_ERR_MAX, P[j]);
+            bad++;
+        } else if (c == 0 && j && x[j - 1] > 0 && !(x[j] > x[j - 1])) {
+            ljgap_verr_add(e, ptr, "k must be strictly increasing: k[%zu] = %g follows k[%zu] = %g",
+                           j, x[j], j - 1, x[j - 1]);
+            bad++;
+        }
+        j++;
+    }
+    if (bad) {
+        free(x);
+        return NULL;
+    }
+    return x;
+}
+
+static void parse_tail(ljgap_verr *e, const cJSON *tail, const char *base, ljgap_combine_input *in)
+{
+    char ptr[PTR], eptr[PTR];
+    const cJSON *q, *qe;
+    snprintf(ptr, sizeof ptr, "%s/tail", base);
+    if (!cJSON_IsObject(tail)) {
+        ljgap_verr_add(e, ptr, "must be an object {\"exponent\": q, \"exponent_err\": e}");
+        return;
+    }
+    ljgap_v_only_fields(e, tail, ptr, tail_fields);
+    q = ljgap_v_required(e, tail, ptr, "exponent", "P ∝ k^q beyond the last point, q < -2");
+    qe = cJSON_GetObjectItemCaseSensitive(tail, "exponent_err");
+    snprintf(eptr, sizeof eptr, "%s/tail/exponent", base);
+    if (q && ljgap_v_num(e, q, eptr, &in->tail_q)) {
+        if (in->tail_q < -2)
+            in->has_tail = 1;
+        else
+            ljgap_verr_add(e, eptr,
+                           "q = %g must be below -2, or the tail carries infinite variance",
+                           in->tail_q);
+    }
+    snprintf(eptr, sizeof eptr, "%s/tail/exponent_err", base);
+    in->tail_q_err = 0;
+    if (qe && ljgap_v_num(e, qe, eptr, &in->tail_q_err) && !(in->tail_q_err >= 0))
+        ljgap_verr_add(e, eptr, "must be zero or positive (got %g)", in->tail_q_err);
+}
+
+/* psds[i] (pointer base) into s->in[i]. */
+static void parse_one(ljgap_verr *e, const cJSON *psd, const char *base,
+                      struct ljgap_combine_spec *s, size_t i)
+{
+    const cJSON *col[3], *kind, *tail;
+    size_t n[3] = {0, 0, 0};
+    char ptr[PTR];
+    if (!cJSON_IsObject(psd)) {
+        ljgap_verr_add(e, base,
+                       "must be a psd object {\"kind\":\"table\", \"k\", \"P\", \"P_err\", "
+                       "\"tail\"} as /v1/psd answers it");
+        return;
+    }
+    ljgap_v_only_fields(e, psd, base, psd_fields);
+    if ((kind = cJSON_GetObjectItemCaseSensitive(psd, "kind")) &&
+        !(cJSON_IsString(kind) && strcmp(kind->valuestring, "table") == 0)) {
+        snprintf(ptr, sizeof ptr, "%s/kind", base);
+        ljgap_verr_add(e, ptr,
+                       "must be \"table\": only measured tables (k, P, P_err) can be combined");
+    }
+    col[0] = ljgap_v_required(e, psd, base, "k", "increasing wavenumbers, 1/m");
+    col[1] = ljgap_v_required(e, psd, base, "P", "the PSD at each k, m⁴");
+    col[2] = ljgap_v_required(e, psd, base, "P_err",
+                              "the standard error of each P, m⁴: the weights need it");
+    for (int c = 0; c < 3; c++) {
+        if (!col[c]) continue;
+        snprintf(ptr, sizeof ptr, "%s/%s", base, col_names[c]);
+        n[c] = ljgap_v_array(e, col[c], ptr, 2, TABLE_MAX, "one entry per point");
+    }
+    for (int c = 1; c < 3; c++)
+        if (n[0] && n[c] && n[c] != n[0]) {
+            snprintf(ptr, sizeof ptr, "%s/%s", base, col_names[c]);
+            ljgap_verr_add(e, ptr, "has %zu entries but k has %zu: give one per k", n[c], n[0]);
+            n[c] = 0;
+        }
+    if ((tail = cJSON_GetObjectItemCaseSensitive(psd, "tail")))
+        parse_tail(e, tail, base, &s->in[i]);
+    if (!n[0] || n[1] != n[0] || n[2] != n[0]) return;
+    for (int c = 0; c < 3; c++)
+        s->col[i][c] = column(e, col[c], base, c, n[0], s->col[i][1]);
+    s->in[i].n = n[0];
+    s->in[i].k = s->col[i][0];
+    s->in[i].P = s->col[i][1];
+    s->in[i].P_err = s->col[i][2];
+}
+
+void ljgap_combine_parse(ljgap_verr *e, const cJSON *root, ljgap_request *rq)
+{
+    const cJSON *psds, *it;
+    struct ljgap_combine_spec *s;
+    char base[16]; /* "/psds/15" */
+    size_t m, i = 0;
+    rq->method = "inverse-variance";
+    ljgap_v_only_fields(e, root, "", combine_fields);
+    if (!(s = rq->combine = calloc(1, sizeof *s))) {
+        e->oom = 1;
+        return;
+    }
+    s->per_decade = 10;
+    if ((it = cJSON_GetObjectItemCaseSensitive(root, "points_per_decade")) &&
+        ljgap_v_num(e, it, "/points_per_decade", &s->per_decade) &&
+        !(s->per_decade >= 2 && s->per_decade <= 100))
+        ljgap_verr_add(e, "/points_per_decade", "%g is outside [2, 100]", s->per_decade);
+    psds = ljgap_v_required(e, root, "", "psds",
+                            "the measurements' psd objects, as /v1/psd answers them");
+    if (!psds || !(m = ljgap_v_array(e, psds, "/psds", LJGAP_COMBINE_MIN, LJGAP_COMBINE_MAX,
+                                     "psd objects of one surface, each with k, P and P_err")))
+        return;
+    s->m = m;
+    cJSON_ArrayForEach(it, psds)
+    {
+        snprintf(base, sizeof base, "/psds/%zu", i);
+        parse_one(e, it, base, s, i++);
+    }
+}
+
+/* ---- the answer ---- */
+
+static void put_fit(job *j, cJSON *err, const ljgap_combine_result *r)
+{
+    cJSON *fit, *efit;
+    if (!r->has_fit) {
+        ljgap_ans_put(j, j->ans, "fit", cJSON_CreateNull());
+        ljgap_ans_put(j, err, "fit", cJSON_CreateNull());
+        return;
+    }
+    fit = ljgap_ans_put(j, j->ans, "fit", cJSON_CreateObject());
+    efit = ljgap_ans_put(j, err, "fit", cJSON_CreateObject());
+    ljgap_ans_num(j, fit, "D", r->fit.D.value, "fit.D", -1);
+    ljgap_ans_num(j, fit, "H", 3 - r->fit.D.value, "fit.H", -1);
+    ljgap_ans_num(j, fit, "C", r->fit.C.value, "fit.C", -1);
+    ljgap_ans_num(j, fit, "k_min", r->fit.kmin, "fit.k_min", -1);
+    ljgap_ans_num(j, fit, "k_max", r->fit.kmax, "fit.k_max", -1);
+    ljgap_ans_put(j, fit, "points", cJSON_CreateNumber((double)r->fit.bins));
+    ljgap_ans_num(j, fit, "chi2_red", r->fit.chi2_red, "fit.chi2_red", -1);
+    ljgap_ans_num(j, fit, "corr_lnC_D", r->fit.corr, "fit.corr_lnC_D", -1);
+    ljgap_ans_num(j, efit, "D", r->fit.D.err, "error.fit.D", -1);
+    ljgap_ans_num(j, efit, "H", r->fit.D.err, "error.fit.H", -1);
+    ljgap_ans_num(j, efit, "C", r->fit.C.err, "error.fit.C", -1);
+}
+
+/* The psd object: the combined table with its errors and the tail (ljgap_combine_result). */
+static void put_psd(job *j, const ljgap_combine_result *r)
+{
+    cJSON *o = ljgap_ans_put(j, j->ans, "psd", cJSON_CreateObject()), *t;
+    char from[24];
+    ljgap_ans_put(j, o, "kind", cJSON_CreateString("table"));
+    ljgap_ans_nums(j, o, "k", r->k, r->n, sizeof *r->k, "psd.k");
+    ljgap_ans_nums(j, o, "P", r->P, r->n, sizeof *r->P, "psd.P");
+    ljgap_ans_nums(j, o, "P_err", r->P_err, r->n, sizeof *r->P_err, "psd.P_err");
+    if (r->tail_from >= -1) {
+        t = ljgap_ans_put(j, o, "tail", cJSON_CreateObject());
+        ljgap_ans_num(j, t, "exponent", r->tail_q, "psd.tail.exponent", -1);
+        ljgap_ans_num(j, t, "exponent_err", r->tail_q_err, "psd.tail.exponent_err", -1);
+    }
+    snprintf(from, sizeof from, "psds/%d", r->tail_from);
+    ljgap_ans_put(j, j->ans, "tail_from",
+                  r->tail_from >= 0    ? cJSON_CreateString(from)
+                  : r->tail_from == -1 ? cJSON_CreateString("fit")
+                                       : cJSON_CreateNull());
+}
+
+int ljgap_run_combine(job *j)
+{
+    struct ljgap_combine_spec *s = j->rq.combine;
+    ljgap_combine_opts o;
+    ljgap_combine_result r;
+    cJSON *a, *err, *x;
+    int st;
+    ljgap_combine_opts_default(&o);
+    o.per_decade = s->per_decade;
+    o.cancel = j->cancel;
+    st = ljgap_combine(s->in, s->m, &o, &r, &j->rq.warn);
+    if (st == LJGAP_EINVAL) {
+        j->bad_ptr = "/psds";
+        j->bad_head = "the measurements cannot be combined";
+    }
+    if (st) {
+        ljgap_combine_result_free(&r);
+        return st;
+    }
+    ljgap_ans_nums(j, j->ans, "k", r.k, r.n, sizeof *r.k, "k");
+    ljgap_ans_nums(j, j->ans, "P", r.P, r.n, sizeof *r.P, "P");
+    a = ljgap_ans_put(j, j->ans, "inputs", cJSON_CreateArray());
+    for (size_t i = 0; a && i < r.n; i++)
+        ljgap_ans_put(j, a, NULL, cJSON_CreateNumber(r.inputs[i]));
+    a = ljgap_ans_put(j, j->ans, "sources", cJSON_CreateArray());
+    for (size_t i = 0; a && i < r.m; i++) {
+        x = ljgap_ans_put(j, a, NULL, cJSON_CreateObject());
+        ljgap_ans_num(j, x, "k_min", r.src[i].k_min, "sources.k_min", (long)i);
+        ljgap_ans_num(j, x, "k_max", r.src[i].k_max, "sources.k_max", (long)i);
+        ljgap_ans_put(j, x, "points", cJSON_CreateNumber((double)r.src[i].points));
+    }
+    a = ljgap_ans_put(j, j->ans, "gaps", cJSON_CreateArray());
+    for (size_t i = 0; a && i < r.ngaps; i++) {
+        x = ljgap_ans_put(j, a, NULL, cJSON_CreateObject());
+        ljgap_ans_num(j, x, "k_min", r.gap[i][0], "gaps.k_min", (long)i);
+        ljgap_ans_num(j, x, "k_max", r.gap[i][1], "gaps.k_max", (long)i);
+    }
+    x = ljgap_ans_put(j, j->ans, "agreement", cJSON_CreateObject());
+    ljgap_ans_num(j, x, "chi2", r.chi2_total, "agreement.chi2", -1);
+    ljgap_ans_put(j, x, "dof", cJSON_CreateNumber((double)r.dof));
+    ljgap_ans_num(j, x, "p", r.p_value, "agreement.p", -1);
+    ljgap_ans_put(j, x, "inflated", cJSON_CreateNumber((double)r.inflated));
+    err = ljgap_ans_put(j, j->ans, "error", cJSON_CreateObject());
+    ljgap_ans_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
+    ljgap_ans_nums(j, err, "chi2", r.chi2, r.n, sizeof *r.chi2, "error.chi2");
+    put_fit(j, err, &r);
+    put_psd(j, &r);
+    ljgap_combine_result_free(&r);
+    return LJGAP_OK;
+}
+
+/* ---- ljgap combine: the request from files ---- */
+
+/* The psd object of one document (see handler.h): a new object, or NULL with why in err. */
+static cJSON *psd_of(const cJSON *doc, char *err, size_t errlen)
+{
+    const cJSON *psd = cJSON_GetObjectItemCaseSensitive(doc, "psd");
+    const cJSON *k = cJSON_GetObjectItemCaseSensitive(doc, "k");
+    const cJSON *P = cJSON_GetObjectItemCaseSensitive(doc, "P");
+    const cJSON *E =
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(doc, "error"), "P");
+    const cJSON *fit = cJSON_GetObjectItemCaseSensitive(doc, "fit"), *tail, *it;
+    double lo = 0, hi = INFINITY;
+    cJSON *o, *ko, *Po, *Eo;
+    if (!cJSON_IsObject(doc)) {
+        snprintf(err, errlen, "not a JSON object");
+        return NULL;
+    }
+    if (cJSON_IsObject(psd) && cJSON_GetObjectItemCaseSensitive(psd, "P_err"))
+        return cJSON_Duplicate(psd, 1); /* a /v1/psd answer whose psd object has errors */
+    if (!psd && cJSON_GetObjectItemCaseSensitive(doc, "P_err"))
+        return cJSON_Duplicate(doc, 1); /* a psd object */
+    if (!cJSON_IsArray(k) || !cJSON_IsArray(P) || !cJSON_IsArray(E) ||
+        cJSON_GetArraySize(k) != cJSON_GetArraySize(P) ||
+        cJSON_GetArraySize(k) != cJSON_GetArraySize(E)) {
+        snprintf(err, errlen,
+                 "neither a /v1/psd answer (k, P, error.P) nor a psd object (k, P, P_err)");
+        return NULL;
+    }
+    /* a /v1/psd answer without P_err in its psd object: its bins over the fit's band */
+    if (cJSON_IsObject(fit)) {
+        lo = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_min"));
+        hi = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_max"));
+    }
+    if (!(o = cJSON_CreateObject()) || !cJSON_AddStringToObject(o, "kind", "table") ||
+        !(ko = cJSON_AddArrayToObject(o, "k")) || !(Po = cJSON_AddArrayToObject(o, "P")) ||
+        !(Eo = cJSON_AddArrayToObject(o, "P_err")))
+        goto oom;
+    for (int i = 0; (it = cJSON_GetArrayItem(k, i)); i++) {
+        double x = cJSON_GetNumberValue(it);
+        if (!(x >= lo * (1 - 1e-9) && x <= hi * (1 + 1e-9))) continue;
+        if (!cJSON_AddItemToArray(ko, cJSON_Duplicate(it, 0)) ||
+            !cJSON_AddItemToArray(Po, cJSON_Duplicate(cJSON_GetArrayItem(P, i), 0)) ||
+            !cJSON_AddItemToArray(Eo, cJSON_Duplicate(cJSON_GetArrayItem(E, i), 0)))
+            goto oom;
+    }
+    tail = cJSON_GetObjectItemCaseSensitive(psd, "tail");
+    if (cJSON_IsObject(tail) && !cJSON_AddItemToObject(o, "tail", cJSON_Duplicate(tail, 1)))
+        goto oom;
+    return o;
+oom:
+    cJSON_Delete(o);
+    snprintf(err, errlen, "out of memory");
+    return NULL;
+}
+
+char *ljgap_combine_body(const char *const *docs, const size_t *lens, size_t n, double per_decade,
+                         char *err, size_t errlen)
+{
+    cJSON *req = cJSON_CreateObject(), *arr = req ? cJSON_AddArrayToObject(req, "psds") : NULL;
+    char *out = NULL, why[200];
+    if (!arr ||
+        (per_decade > 0 && !cJSON_AddNumberToObject(req, "points_per_decade", per_decade))) {
+        snprintf(err, errlen, "out of memory");
+        goto end;
+    }
+    for (size_t i = 0; i < n; i++) {
+        cJSON *doc = cJSON_ParseWithLength(docs[i], lens[i]), *psd;
+        if (!doc) {
+            snprintf(err, errlen, "document %zu is not valid JSON", i + 1);
+            goto end;
+        }
+        psd = psd_of(doc, why, sizeof why);
+        cJSON_Delete(doc);
+        if (!psd || !cJSON_AddItemToArray(arr, psd)) {
+            cJSON_Delete(psd);
+            snprintf(err, errlen, "document %zu: %s", i + 1, psd ? "out of memory" : why);
+            goto end;
+        }
+    }
+    if (!(out = cJSON_PrintUnformatted(req))) snprintf(err, errlen, "out of memory");
+end:
+    cJSON_Delete(req);
+    return out;
+}
