@@ -68,6 +68,7 @@
 
 #include <fftw3.h>
 #include <float.h>
+#include <gsl/gsl_cdf.h>
 #include <gsl/gsl_sf_bessel.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <gsl/gsl_sf_psi.h>
@@ -565,6 +566,7 @@ static int fit_power(const double *k, const double *P, const double *modes, doub
     f->kmax = khi;
     f->bins = m;
     f->chi2_red = chi2_red;
+    f->noise_floor = 0;
     return 0;
 }
 
@@ -615,22 +617,30 @@ static int fit_curvature(const double *k, const double *P, const double *modes, 
 #define TOPO_BAND_SLOPE                                                                            \
     -1.0 /* and it falls faster than k^-1 (D < 3.5): flat parts (roll-off,                         \
           * white-noise floor) are no candidates */
+#define TOPO_BAND_STEEP                                                                            \
+    -6.0 /* when no window passes, the fallback takes none steeper than k^-6 (D < 1: a cutoff) */
+#define TOPO_BAND_Z4                                                                                   \
+    2.4977 /* Φ⁻¹(1 - 0.05/8): a window's four tests (χ², curvature, two ends; two-sided) at 5 % \
+            * together (Bonferroni) */
 
-/* Is the window [a, b] a power law? Its fit into f (-1: no fit). */
+/* Is the window [a, b] a power law? Its fit into f (-1: no fit); *z the largest of its tests'
+ * normalised statistics (χ²'s excess in its standard deviations, the curvature's and the ends'
+ * slope differences in their standard errors), *ok whether all lie within Z and the window
+ * falls faster than k^-1. */
 static int window_fit(const double *k, const double *P, const double *modes, double var_extra,
-                      size_t a, size_t b, double Z, ljgap_topo_fit *f, int *ok)
+                      size_t a, size_t b, double Z, ljgap_topo_fit *f, int *ok, double *z)
 {
     double c, sc;
     *ok = 0;
+    *z = INFINITY;
     if (fit_power(k + a, P + a, modes + a, var_extra, b - a + 1, 0, INFINITY, f)) return -1;
     double dof = (double)f->bins - 2;
-    int chi_ok = f->chi2_red <= 1 + Z * sqrt(2 / dof);
-    int curv_ok = fit_curvature(k + a, P + a, modes + a, var_extra, b - a + 1, &c, &sc) != 0 ||
-                  fabs(c) <= Z * sc;
+    double zmax = (f->chi2_red - 1) / sqrt(2 / dof);
+    if (fit_curvature(k + a, P + a, modes + a, var_extra, b - a + 1, &c, &sc) == 0)
+        zmax = fmax(zmax, fabs(c) / sc);
     /* the slope at either end (its last TOPO_BAND_EDGE decades) agrees with the band's: a
      * floor or a roll-off bends the ends first, where a global test has little power */
-    int ends_ok = 1;
-    for (int end = 0; end < 2 && ends_ok; end++) {
+    for (int end = 0; end < 2; end++) {
         size_t x = end ? b : a, y = x;
         while (end ? (y > a && log10(k[b] / k[y - 1]) <= TOPO_BAND_EDGE)
                    : (y < b && log10(k[y + 1] / k[a]) <= TOPO_BAND_EDGE))
@@ -639,41 +649,123 @@ static int window_fit(const double *k, const double *P, const double *modes, dou
         ljgap_topo_fit g;
         if (v < u + 2 || v - u + 1 >= f->bins) continue;
         if (fit_power(k + u, P + u, modes + u, var_extra, v - u + 1, 0, INFINITY, &g)) continue;
-        ends_ok = fabs(g.D.value - f->D.value) <= Z * hypot(g.D.err, f->D.err);
+        zmax = fmax(zmax, fabs(g.D.value - f->D.value) / hypot(g.D.err, f->D.err));
     }
-    *ok = chi_ok && curv_ok && ends_ok && 2 * f->D.value - 8 < TOPO_BAND_SLOPE;
+    if (!(zmax == zmax)) zmax = INFINITY;
+    *z = zmax;
+    *ok = zmax <= Z && 2 * f->D.value - 8 < TOPO_BAND_SLOPE;
     return 0;
 }
 
 /* The power-law band among the bins [lo, hi] (fix_lo, fix_hi: that end is given and stays):
  * of the windows of contiguous bins at least TOPO_BAND_MIN decades wide that are a power law
- * (window_fit), the widest (then the one of least χ²_red). None: the same with bounds 1.5
- * times wider (the fit is then not sound); still none: the fit over [lo, hi], not sound. f filled
- * and 0, or -1 when [lo, hi] holds fewer than 3 bins. */
+ * (window_fit at TOPO_BAND_Z), the one whose D has the least error. None: of the windows that
+ * fall faster than k^-1 and slower than the cutoff's k^-6 (TOPO_BAND_STEEP), the one whose
+ * largest normalised statistic is least (the straightest; sound when that lies within
+ * TOPO_BAND_Z4, a window's four tests at 5 % together); still none: the fit over [lo, hi], not
+ * sound. f filled and 0, or -1 when [lo, hi] holds fewer than 3 bins. */
+#define TOPO_FLOOR_END 0.2 /* with a floor, the band ends where it reaches 20 % of the law */
+
+/* The power law with a white floor, P = C k^s + N, over the bins [0, n) for a given N: the
+ * weighted fit of ln(P - N) (fit_power on P - N with the modes m (1 - N/P)², the relative
+ * variance of P - N being the bin's times (P/(P - N))²). -1 when a bin lies at or below N. */
+static int fit_minus(const double *k, const double *P, const double *modes, double var_extra,
+                     size_t n, double N, double *Pw, double *mw, ljgap_topo_fit *f)
+{
+    for (size_t i = 0; i < n; i++) {
+        double r = 1 - N / P[i];
+        if (!(r > 0)) return -1;
+        Pw[i] = P[i] - N, mw[i] = modes[i] * r * r;
+    }
+    return fit_power(k, Pw, mw, var_extra, n, 0, INFINITY, f);
+}
+
+/* A white-noise floor above the band starting at bin a: N profiled on a grid (0 and Pmin
+ * 10^(-3 + j/20), j < 60, Pmin the least P over [a, hi]), the law fitted to ln(P - N) over
+ * [a, hi] at each. The floor is kept when it lowers χ² significantly (F(1, n - 3) at 5 %) and
+ * the law + floor is itself acceptable over [a, hi] (χ²_red within 1 + Z √(2/dof)); the band
+ * then ends where N reaches TOPO_FLOOR_END of the law and the fit is the law's with N
+ * subtracted. 1 and f set when a floor is found, 0 otherwise, -1 out of memory. */
+static int fit_floor(const double *k, const double *P, const double *modes, double var_extra,
+                     size_t a, size_t hi, double Z, ljgap_topo_fit *f)
+{
+    size_t n = hi - a + 1;
+    if (n < 6) return 0;
+    double *Pw = malloc(2 * n * sizeof *Pw), Pmin = INFINITY, chi0 = INFINITY, chib = INFINITY,
+           Nb = 0;
+    if (!Pw) return -1;
+    double *mw = Pw + n;
+    ljgap_topo_fit g;
+    for (size_t i = a; i <= hi; i++)
+        Pmin = fmin(Pmin, P[i]);
+    for (int j = -1; j < 60; j++) {
+        double N = j < 0 ? 0 : Pmin * pow(10, -3 + j / 20.0);
+        if (fit_minus(k + a, P + a, modes + a, var_extra, n, N, Pw, mw, &g)) continue;
+        double chi = g.chi2_red * ((double)g.bins - 2);
+        if (j < 0) chi0 = chi;
+        if (chi < chib) chib = chi, Nb = N;
+    }
+    int found = 0;
+    double dof = (double)n - 3;
+    if (Nb > 0 && isfinite(chi0) && chib / dof <= 1 + Z * sqrt(2 / dof) &&
+        (chi0 - chib) / fmax(chib / dof, 1) > gsl_cdf_fdist_Pinv(0.95, 1, dof)) {
+        /* the band's end: the last bin at which N <= TOPO_FLOOR_END × (P - N) */
+        size_t b = a;
+        for (size_t i = a; i <= hi; i++)
+            if (Nb <= TOPO_FLOOR_END * (P[i] - Nb)) b = i;
+        if (b >= a + 2 &&
+            !fit_minus(k + a, P + a, modes + a, var_extra, b - a + 1, Nb, Pw, mw, &g)) {
+            *f = g;
+            f->noise_floor = Nb;
+            found = 1;
+        }
+    }
+    free(Pw);
+    return found;
+}
+
 static int fit_band(const double *k, const double *P, const double *modes, double var_extra,
                     size_t lo, size_t hi, int fix_lo, int fix_hi, ljgap_topo_fit *f)
 {
-    ljgap_topo_fit t, best = {0};
-    double bw = -1, Z = TOPO_BAND_Z;
-    int ok;
+    ljgap_topo_fit t, best = {0}, any = {0};
+    double z, zany = INFINITY, ZM = INFINITY;
+    int ok, found = 0, found_any = 0;
+    size_t M = 0;
     if (hi < lo + 2) return -1;
-    /* the bounds at Z standard errors; when no window passes, at 1.5 Z (then not sound) */
-    for (int pass = 0; pass < 2 && bw < 0; pass++, Z *= 1.5)
+    for (int pass = 0; pass < 2; pass++) {
+        /* pass 0 counts the windows, M; pass 1 tests each at Z_M = Φ⁻¹(1 - 0.05/(8 M)) */
+        ZM = pass ? gsl_cdf_ugaussian_Qinv(0.05 / (8.0 * (double)M)) : 0;
         for (size_t a = lo; a + 2 <= hi && (!fix_lo || a == lo); a++)
             for (size_t b = hi; b >= a + 2 && (!fix_hi || b == hi); b--) {
                 double w = log10(k[b] / k[a]);
                 if (w < TOPO_BAND_MIN && !(a == lo && b == hi)) break; /* narrower from here */
-                if (window_fit(k, P, modes, var_extra, a, b, Z, &t, &ok) || !ok) continue;
-                t.sound = pass == 0;
-                if (bw < 0 || t.D.err < best.D.err) best = t, bw = w;
+                if (!pass) {
+                    M++;
+                    continue;
+                }
+                if (window_fit(k, P, modes, var_extra, a, b, ZM, &t, &ok, &z)) continue;
+                if (ok && (!found || t.D.err < best.D.err)) best = t, found = 1;
+                double s = 2 * t.D.value - 8;
+                if (s < TOPO_BAND_SLOPE && s > TOPO_BAND_STEEP && z < zany)
+                    any = t, zany = z, found_any = 1;
             }
-    if (bw < 0) {
+    }
+    if (found || found_any) {
+        *f = found ? best : any;
+        f->sound = found && f->D.value > 2 && f->D.value < 3;
+        /* a white floor above the band tilts its upper bins before any test sees it */
+        ljgap_topo_fit g;
+        size_t a = lo;
+        while (a < hi && k[a] < f->kmin * (1 - 1e-9))
+            a++;
+        if (!fix_hi && found && fit_floor(k, P, modes, var_extra, a, hi, ZM, &g) == 1) {
+            g.sound = g.D.value > 2 && g.D.value < 3;
+            *f = g;
+        }
+    } else {
         if (fit_power(k + lo, P + lo, modes + lo, var_extra, hi - lo + 1, 0, INFINITY, f))
             return -1;
         f->sound = 0;
-    } else {
-        *f = best;
-        f->sound = best.sound && best.D.value > 2 && best.D.value < 3;
     }
     f->given = fix_lo || fix_hi;
     return 0;
@@ -1062,6 +1154,12 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
                        ? "the spectrum is no power law in any band of the reliable data"
                        : "the fitted fractal dimension lies outside (2, 3)",
                    res->fit.D.value, res->fit.chi2_red, res->fit.kmin, res->fit.kmax);
+    if (res->has_fit && res->fit.noise_floor > 0)
+        ljgap_warn(w,
+                   "topography: a white-noise floor (P = %.3g) lies above the power law: the "
+                   "fit band ends at k = %g, where it reaches %g %% of the law, and the law is "
+                   "fitted with the floor subtracted",
+                   res->fit.noise_floor, res->fit.kmax, 100 * TOPO_FLOOR_END);
     /* moments: a profile's m2 is <h'²>; an isotropic surface has <|∇h|²> = 2 <h'²> */
     double f2 = profile ? 2 : 1, v = vif;
     res->m0_spectrum = mo.m0;

@@ -72,12 +72,14 @@ typedef struct {
     double corr; /* correlation coefficient of the estimates of ln C and D */
     double kmin; /* the band fitted: first and last bin k used */
     double kmax;
-    size_t bins;     /* bins used (>= 3) */
-    double chi2_red; /* χ² per degree of freedom against the bins' errors; the errors of D
-                      * and C are scaled up by √chi2_red when it exceeds 1 (misfit) */
-    int given;       /* 1: the band (or one of its ends) was given in the options */
-    int sound;       /* 1: the bins in the band are a power law (χ²_red and curvature within
-                      * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
+    size_t bins;        /* bins used (>= 3) */
+    double chi2_red;    /* χ² per degree of freedom against the bins' errors; the errors of D
+                         * and C are scaled up by √chi2_red when it exceeds 1 (misfit) */
+    int given;          /* 1: the band (or one of its ends) was given in the options */
+    int sound;          /* 1: the bins in the band are a power law (χ²_red and curvature within
+                         * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
+    double noise_floor; /* a white floor N (unit⁴) found above the band, P = C k^(2D-8) + N
+                         * fitted with it (core/topo.c: fit_floor); 0: none */
 } ljgap_topo_fit;
 
 typedef struct {
