@@ -609,19 +609,13 @@ static int fit_curvature(const double *k, const double *P, const double *modes, 
     return 0;
 }
 
-#define TOPO_BAND_MIN 0.7 /* decades: the narrowest band the detection takes */
-#define TOPO_BAND_Z                                                                                \
-    2.0                     /* a band is a power law when χ²_red <= 1 + Z √(2/dof) and its     \
-                             * curvature in log-log is below Z standard errors */
+#define TOPO_BAND_MIN 0.7   /* decades: the narrowest band the detection takes */
 #define TOPO_BAND_EDGE 0.35 /* decades: the ends whose slope must agree with the band's */
 #define TOPO_BAND_SLOPE                                                                            \
     -1.0 /* and it falls faster than k^-1 (D < 3.5): flat parts (roll-off,                         \
           * white-noise floor) are no candidates */
 #define TOPO_BAND_STEEP                                                                            \
     -6.0 /* when no window passes, the fallback takes none steeper than k^-6 (D < 1: a cutoff) */
-#define TOPO_BAND_Z4                                                                                   \
-    2.4977 /* Φ⁻¹(1 - 0.05/8): a window's four tests (χ², curvature, two ends; two-sided) at 5 % \
-            * together (Bonferroni) */
 
 /* Is the window [a, b] a power law? Its fit into f (-1: no fit); *z the largest of its tests'
  * normalised statistics (χ²'s excess in its standard deviations, the curvature's and the ends'
@@ -657,13 +651,6 @@ static int window_fit(const double *k, const double *P, const double *modes, dou
     return 0;
 }
 
-/* The power-law band among the bins [lo, hi] (fix_lo, fix_hi: that end is given and stays):
- * of the windows of contiguous bins at least TOPO_BAND_MIN decades wide that are a power law
- * (window_fit at TOPO_BAND_Z), the one whose D has the least error. None: of the windows that
- * fall faster than k^-1 and slower than the cutoff's k^-6 (TOPO_BAND_STEEP), the one whose
- * largest normalised statistic is least (the straightest; sound when that lies within
- * TOPO_BAND_Z4, a window's four tests at 5 % together); still none: the fit over [lo, hi], not
- * sound. f filled and 0, or -1 when [lo, hi] holds fewer than 3 bins. */
 #define TOPO_FLOOR_END 0.2 /* with a floor, the band ends where it reaches 20 % of the law */
 
 /* The power law with a white floor, P = C k^s + N, over the bins [0, n) for a given N: the
@@ -724,6 +711,15 @@ static int fit_floor(const double *k, const double *P, const double *modes, doub
     return found;
 }
 
+/* The power-law band among the bins [lo, hi] (fix_lo, fix_hi: that end is given and stays):
+ * of the M windows of contiguous bins at least TOPO_BAND_MIN decades wide, those that are a
+ * power law with each test at Z_M = Φ⁻¹(1 - 0.05/(8 M)) (window_fit; 4 tests a window, two
+ * of them two-sided: the family of all at 5 %, Bonferroni); of those the one whose D has the
+ * least error (scaled by its misfit), then, unless the upper end is given, with a white floor
+ * when one is found (fit_floor). None passes: of the windows that fall faster than k^-1 and
+ * slower than k^-6 (TOPO_BAND_STEEP: no cutoff), the one whose largest normalised statistic is
+ * least, not sound; none of those: the fit over [lo, hi], not sound. f filled and 0, or -1
+ * when [lo, hi] holds fewer than 3 bins. */
 static int fit_band(const double *k, const double *P, const double *modes, double var_extra,
                     size_t lo, size_t hi, int fix_lo, int fix_hi, ljgap_topo_fit *f)
 {
