@@ -1,6 +1,6 @@
 /* combine.c -- POST /v1/psd/combine: several measured PSDs of one surface as one (issue 25).
  *
- * Request: {"psds": [psd, psd, ...], "points_per_decade": 10}, each psd a table as /v1/psd
+ * Request: {"psds": [psd, psd, ...], "points_per_decade": 10, "material": {...}}, each psd a table as /v1/psd
  * answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
  * "exponent_err":e}} (kind and tail optional; P_err required: the weights need it). Every bad
  * value is a 422 problem at its pointer (/psds/2/P_err/7). The core (ljgap_combine.h) does the
@@ -10,7 +10,9 @@
  *   chi2_red, corr_lnC_D} or null, tail_from ("psds/I", "fit" or null), psd {kind, k, P, P_err,
  *   tail {exponent, exponent_err}}, error {P, chi2 [per point], fit {D, H, C}}, meta.
  * A combination whose bands hold fewer than two grid points is a 422 outside-model problem at
- * /psds. No material: the answer is in SI as the inputs are; /v1/psd gives the theory's domain.
+ * /psds. An optional "material" (request.c's, as /v1/psd's) adds domain and si as /v1/psd
+ * gives them (handler.c's ljgap_ans_domain_begin/_end, ljgap_ans_si) and starts the psd object
+ * at domain.k1.
  */
 #include "answer.h"
 #include "ljgap_combine.h"
