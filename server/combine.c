@@ -1,7 +1,7 @@
 /* combine.c -- POST /v1/psd/combine: several measured PSDs of one surface as one (issue 25).
  *
- * Request: {"psds": [psd, psd, ...], "points_per_decade": 10, "material": {...}}, each psd a table as /v1/psd
- * answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
+ * Request: {"psds": [psd, psd, ...], "points_per_decade": 10, "material": {...}}, each psd a table
+ * as /v1/psd answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
  * "exponent_err":e}} (kind and tail optional; P_err required: the weights need it). Every bad
  * value is a 422 problem at its pointer (/psds/2/P_err/7). The core (ljgap_combine.h) does the
  * work; the answer (docs/api.md, docs/topography.md):
