@@ -35,6 +35,22 @@ void ljgap_ans_num(job *j, cJSON *parent, const char *key, double v, const char 
 cJSON *ljgap_ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
                       size_t stride, const char *label);
 
+/* The psd object of a table k, P, P_err (n knots) with the tail P ∝ k^q when q is finite
+ * (exponent_err q_err) as j->ans's "psd"; its variance with the tail into *m0 (NAN: none). */
+void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
+                         double q, double q_err, double *m0);
+/* With a material (j->rq.has_material): the answer's "domain" of the band [kf, kl] (named band
+ * in its warning), k1 in d->k1; write the psd object from d->k1, then ljgap_ans_domain_end with
+ * its variance (NAN: none) adds h_rms and m0_dimensionless. */
+typedef struct {
+    cJSON *obj;
+    const char *band;
+    double kd, kf, kl, k1, inside;
+} ljgap_domain;
+void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap_domain *d);
+void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0);
+/* With a material: the answer's "si" scales (chi_m, sigma0_Pa, E_star_Pa) */
+void ljgap_ans_si(job *j);
 /* combine.c: the runner of psd/combine */
 int ljgap_run_combine(job *j);
 

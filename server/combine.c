@@ -1,7 +1,7 @@
 /* combine.c -- POST /v1/psd/combine: several measured PSDs of one surface as one (issue 25).
  *
- * Request: {"psds": [psd, psd, ...], "points_per_decade": 10}, each psd a table as /v1/psd
- * answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
+ * Request: {"psds": [psd, psd, ...], "points_per_decade": 10, "material": {...}}, each psd a table
+ * as /v1/psd answers it: {"kind":"table", "k":[1/m], "P":[m⁴], "P_err":[m⁴], "tail":{"exponent":q,
  * "exponent_err":e}} (kind and tail optional; P_err required: the weights need it). Every bad
  * value is a 422 problem at its pointer (/psds/2/P_err/7). The core (ljgap_combine.h) does the
  * work; the answer (docs/api.md, docs/topography.md):
@@ -10,7 +10,9 @@
  *   chi2_red, corr_lnC_D} or null, tail_from ("psds/I", "fit" or null), psd {kind, k, P, P_err,
  *   tail {exponent, exponent_err}}, error {P, chi2 [per point], fit {D, H, C}}, meta.
  * A combination whose bands hold fewer than two grid points is a 422 outside-model problem at
- * /psds. No material: the answer is in SI as the inputs are; /v1/psd gives the theory's domain.
+ * /psds. An optional "material" (request.c's, as /v1/psd's) adds domain and si as /v1/psd
+ * gives them (handler.c's ljgap_ans_domain_begin/_end, ljgap_ans_si) and starts the psd object
+ * at domain.k1.
  */
 #include "answer.h"
 #include "ljgap_combine.h"
@@ -39,7 +41,7 @@ void ljgap_combine_spec_free(struct ljgap_combine_spec *s)
     free(s);
 }
 
-static const char *const combine_fields[] = {"psds", "points_per_decade", NULL};
+static const char *const combine_fields[] = {"psds", "points_per_decade", "material", NULL};
 static const char *const psd_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
 static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 static const char *const col_names[3] = {"k", "P", "P_err"};
@@ -215,25 +217,53 @@ static void put_fit(job *j, cJSON *err, const ljgap_combine_result *r)
     ljgap_ans_num(j, efit, "C", r->fit.C.err, "error.fit.C", -1);
 }
 
-/* The psd object: the combined table with its errors and the tail (ljgap_combine_result). */
-static void put_psd(job *j, const ljgap_combine_result *r)
+/* The psd object: the combined table from k_from on (its log-log interpolation cut there, so
+ * the variance above k_from is kept) with its errors and the tail; null with a warning when
+ * k_from is at or beyond the table's last point. Its variance into *m0 (NAN: null). */
+static void put_psd(job *j, const ljgap_combine_result *r, double k_from, double *m0)
 {
-    cJSON *o = ljgap_ans_put(j, j->ans, "psd", cJSON_CreateObject()), *t;
     char from[24];
-    ljgap_ans_put(j, o, "kind", cJSON_CreateString("table"));
-    ljgap_ans_nums(j, o, "k", r->k, r->n, sizeof *r->k, "psd.k");
-    ljgap_ans_nums(j, o, "P", r->P, r->n, sizeof *r->P, "psd.P");
-    ljgap_ans_nums(j, o, "P_err", r->P_err, r->n, sizeof *r->P_err, "psd.P_err");
-    if (r->tail_from >= -1) {
-        t = ljgap_ans_put(j, o, "tail", cJSON_CreateObject());
-        ljgap_ans_num(j, t, "exponent", r->tail_q, "psd.tail.exponent", -1);
-        ljgap_ans_num(j, t, "exponent_err", r->tail_q_err, "psd.tail.exponent_err", -1);
-    }
+    size_t i = 0, n;
+    double *k, *P, *E, q = r->tail_from >= -1 ? r->tail_q : NAN;
+    *m0 = NAN;
     snprintf(from, sizeof from, "psds/%d", r->tail_from);
     ljgap_ans_put(j, j->ans, "tail_from",
                   r->tail_from >= 0    ? cJSON_CreateString(from)
                   : r->tail_from == -1 ? cJSON_CreateString("fit")
                                        : cJSON_CreateNull());
+    if (!(k_from < r->k[r->n - 1] * (1 - 1e-12))) {
+        ljgap_ans_put(j, j->ans, "psd", cJSON_CreateNull());
+        ljgap_warn(&j->rq.warn,
+                   "no psd object: the theory's band starts at k1 = %g 1/m, at or beyond the "
+                   "combined table's last point k = %g 1/m",
+                   k_from, r->k[r->n - 1]);
+        return;
+    }
+    while (i + 1 < r->n && r->k[i + 1] <= k_from * (1 + 1e-12))
+        i++; /* k[i] <= k_from < k[i + 1], or k_from below the table (i = 0) */
+    n = r->n - i;
+    k = malloc(n * sizeof *k);
+    P = malloc(n * sizeof *P);
+    E = malloc(n * sizeof *E);
+    if (!k || !P || !E) {
+        j->oom = 1;
+        goto end;
+    }
+    memcpy(k, r->k + i, n * sizeof *k);
+    memcpy(P, r->P + i, n * sizeof *P);
+    memcpy(E, r->P_err + i, n * sizeof *E);
+    if (k_from > r->k[i] * (1 + 1e-12)) { /* the cut inside [k[i], k[i+1]]: log-log */
+        double t = log(k_from / r->k[i]) / log(r->k[i + 1] / r->k[i]);
+        double rel = (1 - t) * r->P_err[i] / r->P[i] + t * r->P_err[i + 1] / r->P[i + 1];
+        k[0] = k_from;
+        P[0] = exp((1 - t) * log(r->P[i]) + t * log(r->P[i + 1]));
+        E[0] = P[0] * rel;
+    }
+    ljgap_ans_table_psd(j, k, P, E, n, q, r->tail_q_err, m0);
+end:
+    free(k);
+    free(P);
+    free(E);
 }
 
 int ljgap_run_combine(job *j)
@@ -242,6 +272,7 @@ int ljgap_run_combine(job *j)
     ljgap_combine_opts o;
     ljgap_combine_result r;
     cJSON *a, *err, *x;
+    double m0;
     int st;
     ljgap_combine_opts_default(&o);
     o.per_decade = s->per_decade;
@@ -282,64 +313,60 @@ int ljgap_run_combine(job *j)
     ljgap_ans_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
     ljgap_ans_nums(j, err, "chi2", r.chi2, r.n, sizeof *r.chi2, "error.chi2");
     put_fit(j, err, &r);
-    put_psd(j, &r);
+    if (j->rq.has_material) {
+        ljgap_domain d;
+        ljgap_ans_domain_begin(j, r.k[0], r.k[r.n - 1], "combined band", &d);
+        put_psd(j, &r, d.k1, &m0);
+        ljgap_ans_domain_end(j, &d, m0);
+    } else {
+        put_psd(j, &r, 0, &m0);
+    }
+    ljgap_ans_si(j);
     ljgap_combine_result_free(&r);
     return LJGAP_OK;
 }
 
 /* ---- ljgap combine: the request from files ---- */
 
-/* The psd object of one document (see handler.h): a new object, or NULL with why in err. */
+/* The psd object of one document (see handler.h): a /v1/psd answer's "psd" or a bare psd
+ * object (k, P, P_err), as a new object; NULL with why in err. */
 static cJSON *psd_of(const cJSON *doc, char *err, size_t errlen)
 {
-    const cJSON *psd = cJSON_GetObjectItemCaseSensitive(doc, "psd");
-    const cJSON *k = cJSON_GetObjectItemCaseSensitive(doc, "k");
-    const cJSON *P = cJSON_GetObjectItemCaseSensitive(doc, "P");
-    const cJSON *E =
-        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(doc, "error"), "P");
-    const cJSON *fit = cJSON_GetObjectItemCaseSensitive(doc, "fit"), *tail, *it;
-    double lo = 0, hi = INFINITY;
-    cJSON *o, *ko, *Po, *Eo;
+    const cJSON *psd;
+    cJSON *o;
     if (!cJSON_IsObject(doc)) {
         snprintf(err, errlen, "not a JSON object");
         return NULL;
     }
-    if (cJSON_IsObject(psd) && cJSON_GetObjectItemCaseSensitive(psd, "P_err"))
-        return cJSON_Duplicate(psd, 1); /* a /v1/psd answer whose psd object has errors */
-    if (!psd && cJSON_GetObjectItemCaseSensitive(doc, "P_err"))
-        return cJSON_Duplicate(doc, 1); /* a psd object */
-    if (!cJSON_IsArray(k) || !cJSON_IsArray(P) || !cJSON_IsArray(E) ||
-        cJSON_GetArraySize(k) != cJSON_GetArraySize(P) ||
-        cJSON_GetArraySize(k) != cJSON_GetArraySize(E)) {
-        snprintf(err, errlen,
-                 "neither a /v1/psd answer (k, P, error.P) nor a psd object (k, P, P_err)");
-        return NULL;
+    if (!cJSON_HasObjectItem(doc, "psd")) { /* a bare psd object */
+        if (!cJSON_HasObjectItem(doc, "P_err")) {
+            snprintf(err, errlen,
+                     "neither a /v1/psd answer (with its \"psd\" object) nor a psd object "
+                     "(k, P, P_err)");
+            return NULL;
+        }
+        psd = doc;
+    } else {
+        psd = cJSON_GetObjectItemCaseSensitive(doc, "psd");
+        if (!cJSON_IsObject(psd)) {
+            snprintf(err, errlen,
+                     "its \"psd\" is %s: the /v1/psd answer has no psd object (see its "
+                     "meta.warnings) and cannot be combined",
+                     cJSON_IsNull(psd) ? "null" : "not an object");
+            return NULL;
+        }
+        if (!cJSON_HasObjectItem(psd, "P_err")) {
+            snprintf(err, errlen,
+                     "its \"psd\" object has no P_err (a %s psd, or an answer of an older "
+                     "ljgapd): the weights need the errors; ask /v1/psd again",
+                     cJSON_IsString(cJSON_GetObjectItemCaseSensitive(psd, "kind"))
+                         ? cJSON_GetObjectItemCaseSensitive(psd, "kind")->valuestring
+                         : "kindless");
+            return NULL;
+        }
     }
-    /* a /v1/psd answer without P_err in its psd object: its bins over the fit's band */
-    if (cJSON_IsObject(fit)) {
-        lo = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_min"));
-        hi = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(fit, "k_max"));
-    }
-    if (!(o = cJSON_CreateObject()) || !cJSON_AddStringToObject(o, "kind", "table") ||
-        !(ko = cJSON_AddArrayToObject(o, "k")) || !(Po = cJSON_AddArrayToObject(o, "P")) ||
-        !(Eo = cJSON_AddArrayToObject(o, "P_err")))
-        goto oom;
-    for (int i = 0; (it = cJSON_GetArrayItem(k, i)); i++) {
-        double x = cJSON_GetNumberValue(it);
-        if (!(x >= lo * (1 - 1e-9) && x <= hi * (1 + 1e-9))) continue;
-        if (!cJSON_AddItemToArray(ko, cJSON_Duplicate(it, 0)) ||
-            !cJSON_AddItemToArray(Po, cJSON_Duplicate(cJSON_GetArrayItem(P, i), 0)) ||
-            !cJSON_AddItemToArray(Eo, cJSON_Duplicate(cJSON_GetArrayItem(E, i), 0)))
-            goto oom;
-    }
-    tail = cJSON_GetObjectItemCaseSensitive(psd, "tail");
-    if (cJSON_IsObject(tail) && !cJSON_AddItemToObject(o, "tail", cJSON_Duplicate(tail, 1)))
-        goto oom;
+    if (!(o = cJSON_Duplicate(psd, 1))) snprintf(err, errlen, "out of memory");
     return o;
-oom:
-    cJSON_Delete(o);
-    snprintf(err, errlen, "out of memory");
-    return NULL;
 }
 
 char *ljgap_combine_body(const char *const *docs, const size_t *lens, size_t n, double per_decade,

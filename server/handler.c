@@ -631,6 +631,29 @@ static int fit_gives_tail(const ljgap_topo_result *r)
     return 1;
 }
 
+/* The psd object of a table (k, P, P_err: n knots, log-log interpolated) with the tail P ∝ k^q
+ * when q is finite: /v1/psd's (put_psd_object) and /v1/psd/combine's. Its variance (with the
+ * tail) into *m0 (NAN when it cannot be formed). */
+void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
+                         double q, double q_err, double *m0)
+{
+    cJSON *o = put(j, j->ans, "psd", cJSON_CreateObject());
+    int tail = isfinite(q);
+    ljgap_psd psd;
+    *m0 = NAN;
+    put(j, o, "kind", cJSON_CreateString("table"));
+    put_nums(j, o, "k", k, n, sizeof *k, "psd.k");
+    put_nums(j, o, "P", P, n, sizeof *P, "psd.P");
+    put_nums(j, o, "P_err", P_err, n, sizeof *P_err, "psd.P_err");
+    if (tail) {
+        cJSON *to = put(j, o, "tail", cJSON_CreateObject());
+        put_num(j, to, "exponent", q, "psd.tail", -1);
+        put_num(j, to, "exponent_err", q_err, "psd.tail.exponent_err", -1);
+    }
+    if (ljgap_psd_table(&psd, k, P, n, tail, tail ? q : 0) == LJGAP_OK) *m0 = psd.m0;
+    ljgap_psd_free(&psd);
+}
+
 /* The psd object for /v1/adhesion with "units":"SI": the reliable bins from k_from on as a
  * table that keeps their variance (ljgap_topo_table), with P_err and the fitted power law as
  * the tail when fit_gives_tail; the fitted power law itself from k_from when no reliable bin
@@ -650,16 +673,8 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
         return;
     }
     if (st == LJGAP_OK) {
-        o = put(j, j->ans, "psd", cJSON_CreateObject());
-        put(j, o, "kind", cJSON_CreateString("table"));
-        put_nums(j, o, "k", t.k, t.n, sizeof *t.k, "psd.k");
-        put_nums(j, o, "P", t.P, t.n, sizeof *t.P, "psd.P");
-        put_nums(j, o, "P_err", t.P_err, t.n, sizeof *t.P_err, "psd.P_err");
-        if (tail) {
-            cJSON *to = put(j, o, "tail", cJSON_CreateObject());
-            put_num(j, to, "exponent", q, "psd.tail", -1);
-            put_num(j, to, "exponent_err", 2 * r->fit.D.err, "psd.tail.exponent_err", -1);
-        } else {
+        ljgap_ans_table_psd(j, t.k, t.P, t.P_err, t.n, tail ? q : NAN, 2 * r->fit.D.err, m0);
+        if (!tail)
             ljgap_warn(
                 &j->rq.warn, "the psd object has no tail: %s, so the table ends at k = %g 1/m",
                 !r->has_fit     ? "there is no power-law fit"
@@ -667,9 +682,6 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
                                 : "the bins above the fit band are no power law (a cutoff, a noise "
                                   "floor or the tip's trace?) and are kept as measured",
                 t.k[t.n - 1]);
-        }
-        if (ljgap_psd_table(&psd, t.k, t.P, t.n, tail, q) == LJGAP_OK) *m0 = psd.m0;
-        ljgap_psd_free(&psd);
     } else if (r->has_fit && r->fit.sound && q < -2) {
         o = put(j, j->ans, "psd", cJSON_CreateObject());
         put(j, o, "kind", cJSON_CreateString("power"));
@@ -693,36 +705,61 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
     ljgap_topo_tab_free(&t);
 }
 
-/* With a material: where the reliable band lies against the theory's k > k0/χ, the k1 it
- * proposes (the band's lower edge, or K1_MARGIN k0/χ when that is higher) and the psd object
- * from there. */
-static void put_domain(job *j, const ljgap_topo_result *r)
+/* With a material: where the band [kf, kl] (its name: "reliable band", ...) lies against the
+ * theory's k > k0/χ and the k1 it proposes (kf, or K1_MARGIN k0/χ when that is higher) into
+ * d and the answer's "domain"; the caller then writes the psd object from d->k1 and ends with
+ * ljgap_ans_domain_end and the object's variance. /v1/psd's and /v1/psd/combine's. */
+void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap_domain *d)
 {
     const ljgap_material *m = &j->rq.mat;
-    double chi = ljgap_units_chi(m), kd = ljgap_k0() / chi, kf = r->rel_kmin;
-    double kl = r->k[r->rel_last];
-    double k1 = fmax(kf, K1_MARGIN * kd), m0;
-    double inside = kl <= kd ? 0 : kf > kd ? 1 : log(kl / kd) / log(kl / kf);
-    cJSON *d = put(j, j->ans, "domain", cJSON_CreateObject());
-    put_num(j, d, "k0", kd, "domain.k0", -1);
-    put(j, d, "inside", cJSON_CreateString(inside == 1 ? "all" : inside == 0 ? "none" : "part"));
-    put_num(j, d, "fraction", inside, "domain.fraction", -1);
-    put_num(j, d, "k1", k1, "domain.k1", -1);
-    put_num(j, d, "k1_dimensionless", k1 * chi, "domain.k1_dimensionless", -1);
-    put_psd_object(j, r, k1, &m0);
+    double chi = ljgap_units_chi(m);
+    d->kd = ljgap_k0() / chi;
+    d->kf = kf;
+    d->kl = kl;
+    d->band = band;
+    d->k1 = fmax(kf, K1_MARGIN * d->kd);
+    d->inside = kl <= d->kd ? 0 : kf > d->kd ? 1 : log(kl / d->kd) / log(kl / kf);
+    d->obj = put(j, j->ans, "domain", cJSON_CreateObject());
+    put_num(j, d->obj, "k0", d->kd, "domain.k0", -1);
+    put(j, d->obj, "inside",
+        cJSON_CreateString(d->inside == 1   ? "all"
+                           : d->inside == 0 ? "none"
+                                            : "part"));
+    put_num(j, d->obj, "fraction", d->inside, "domain.fraction", -1);
+    put_num(j, d->obj, "k1", d->k1, "domain.k1", -1);
+    put_num(j, d->obj, "k1_dimensionless", d->k1 * chi, "domain.k1_dimensionless", -1);
+}
+
+void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0)
+{
     if (isfinite(m0)) {
-        put_num(j, d, "h_rms", sqrt(m0), "domain.h_rms", -1);
-        put_num(j, d, "m0_dimensionless", ljgap_units_var_to_dimless(m, m0),
+        put_num(j, d->obj, "h_rms", sqrt(m0), "domain.h_rms", -1);
+        put_num(j, d->obj, "m0_dimensionless", ljgap_units_var_to_dimless(&j->rq.mat, m0),
                 "domain.m0_dimensionless", -1);
     } else {
-        put(j, d, "h_rms", cJSON_CreateNull());
-        put(j, d, "m0_dimensionless", cJSON_CreateNull());
+        put(j, d->obj, "h_rms", cJSON_CreateNull());
+        put(j, d->obj, "m0_dimensionless", cJSON_CreateNull());
     }
-    if (inside < 1)
+    if (d->inside < 1)
         ljgap_warn(&j->rq.warn,
-                   "%s of the reliable band (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
+                   "%s of the %s (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
                    "outside the theory's domain: the psd object starts at k1 = %g 1/m",
-                   inside == 0 ? "all" : "part", kf, kl, kd, k1);
+                   d->inside == 0 ? "all" : "part", d->band, d->kf, d->kl, d->kd, d->k1);
+}
+
+void ljgap_ans_si(job *j)
+{
+    put_si(j, j->ans, NULL);
+}
+
+/* With a material: the domain of the reliable band and the psd object from its k1. */
+static void put_domain(job *j, const ljgap_topo_result *r)
+{
+    ljgap_domain d;
+    double m0;
+    ljgap_ans_domain_begin(j, r->rel_kmin, r->k[r->rel_last], "reliable band", &d);
+    put_psd_object(j, r, d.k1, &m0);
+    ljgap_ans_domain_end(j, &d, m0);
 }
 
 static int run_psd(job *j)

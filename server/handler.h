@@ -93,9 +93,9 @@ int ljgap_handler_has_text(const char *endpoint);
 
 /* ---- ljgap combine: the body of POST /v1/psd/combine from documents ----
  * Each of docs[0..n) (lens[i] bytes of JSON) is a /v1/psd answer or a psd object: an answer's
- * psd object when it has P_err, else the answer's bins (k, P, error.P) within its fit's band
- * (k_min to k_max; all of them without a fit) with its psd object's tail; a psd object
- * ({k, P, P_err, ...}) as it is. per_decade > 0 adds points_per_decade. Returns the body
+ * psd object (a table with P_err; an answer whose psd is null or has no P_err is an error that
+ * says so), a psd object ({k, P, P_err, ...}) as it is. per_decade > 0 adds
+ * points_per_decade. Returns the body
  * (malloc'd; free it), or NULL with the reason in err. */
 char *ljgap_combine_body(const char *const *docs, const size_t *lens, size_t n, double per_decade,
                          char *err, size_t errlen);

@@ -1255,6 +1255,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     }
     if (ep == LJGAP_EP_COMBINE) {
         ljgap_combine_parse(e, root, rq);
+        parse_material(e, root, 0, rq); /* optional: the theory's domain, as /v1/psd */
         return e->n;
     }
     only_fields(e, root, "", common_fields, extra[ep]);

@@ -170,17 +170,9 @@ const LJTopo = (() => {
   }
 
   /* The psd object of a /v1/psd answer for the combination (as ljgap_combine_body makes it). */
+  /* The psd object of a /v1/psd answer, for the combine: null when it has none (or no P_err). */
   function psdObject(a) {
-    if (a.psd && a.psd.P_err) return a.psd;
-    const lo = a.fit ? a.fit.k_min : 0;
-    const hi = a.fit ? a.fit.k_max : Infinity;
-    const o = { kind: "table", k: [], P: [], P_err: [] };
-    a.k.forEach((k, i) => {
-      if (k < lo * (1 - 1e-9) || k > hi * (1 + 1e-9)) return;
-      o.k.push(k), o.P.push(a.P[i]), o.P_err.push(a.error.P[i]);
-    });
-    if (a.psd && a.psd.tail) o.tail = a.psd.tail;
-    return o;
+    return a.psd && a.psd.kind === "table" && a.psd.P_err ? a.psd : null;
   }
 
   function drawCombined() {
@@ -206,7 +198,11 @@ const LJTopo = (() => {
     const notes = measured.map((m, i) => `${m.name}: k = ${api.fmt(c.sources[i].k_min, 4)} … ${api.fmt(c.sources[i].k_max, 4)} 1/m, ${c.sources[i].points} points of the combination`);
     const ag = c.agreement;
     notes.push(ag.dof ? `overlap: χ² = ${api.fmt(ag.chi2, 3)} for ${ag.dof} degrees of freedom (p = ${api.fmt(ag.p, 2)}); ${ag.inflated} errors inflated` : "the measurements do not overlap");
-    notes.push(`combined: ${c.k.length} points, ${api.fmt(c.k[0], 4)} … ${api.fmt(c.k[c.k.length - 1], 4)} 1/m; tail ${c.psd.tail ? `k^${api.fmt(c.psd.tail.exponent, 4)} from ${c.tail_from}` : "none"}`);
+    notes.push(`combined: ${c.k.length} points, ${api.fmt(c.k[0], 4)} … ${api.fmt(c.k[c.k.length - 1], 4)} 1/m; tail ${c.psd && c.psd.tail ? `k^${api.fmt(c.psd.tail.exponent, 4)} from ${c.tail_from}` : "none"}`);
+    if (c.domain) {
+      const d = c.domain;
+      notes.push(`theory's domain k > k0/χ = ${api.fmt(d.k0, 4)} 1/m: ${d.inside} of the combined band (${api.fmt(100 * d.fraction, 3)} %); the psd object starts at k1 = ${api.fmt(d.k1, 4)} 1/m${d.h_rms === null ? "" : `, h_rms = ${api.fmt(d.h_rms, 4)} m`}`);
+    }
     $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), api.metaLine(c), ...api.warnings(c));
   }
 
@@ -237,14 +233,22 @@ const LJTopo = (() => {
       if (!a) return;
       answers.push({ name: f.name, answer: a });
     }
-    const body = JSON.stringify({ psds: answers.map((m) => psdObject(m.answer)) });
+    const none = answers.find((m) => !psdObject(m.answer));
+    if (none) {
+      api.setIdle(`${none.name}: its /v1/psd answer has no psd table with P_err (see its warnings), so it cannot be combined.`, true);
+      return;
+    }
+    const req = { psds: answers.map((m) => psdObject(m.answer)) };
+    const mat = api.materialObject();
+    if (mat) req.material = mat;
+    const body = JSON.stringify(req);
     p.requests.push({ endpoint: "psd/combine", text: body, label: "psd/combine" });
     api.setBusy(`combining ${files.length} PSDs`);
     const c = await ask(p, "psd/combine", body, {});
     if (!c) return;
     measured = answers;
     psd = c;
-    $("topo-k1").value = api.fmt(psd.k[0], 6);
+    $("topo-k1").value = api.fmt(psd.psd ? psd.psd.k[0] : psd.k[0], 6);
     $("topo-k2").value = "";
     readoutCombined(psd);
     draw();
@@ -277,6 +281,30 @@ const LJTopo = (() => {
     return out;
   }
 
+  /* A table psd object (k, P, P_err, tail) cut to [k1, k2] (k2 null: to its end, with its
+   * tail), log-log between its knots: the combined psd object for the adhesion. */
+  function cut(o, k1, k2) {
+    const k = [];
+    const P = [];
+    const E = [];
+    const n = o.k.length;
+    const atErr = (x) => {
+      let i = 0;
+      while (i + 2 < n && o.k[i + 1] < x) i++;
+      const t = Math.log(x / o.k[i]) / Math.log(o.k[i + 1] / o.k[i]);
+      const p = at(o, x);
+      return p * ((1 - t) * (o.P_err[i] / o.P[i]) + t * (o.P_err[i + 1] / o.P[i + 1]));
+    };
+    if (k1 > o.k[0] && k1 < o.k[n - 1]) k.push(k1), P.push(at(o, k1)), E.push(atErr(k1));
+    o.k.forEach((x, i) => {
+      if (x >= k1 && (k2 === null || x <= k2) && !(k.length && x <= k[k.length - 1])) k.push(x), P.push(o.P[i]), E.push(o.P_err[i]);
+    });
+    if (k2 !== null && k2 > o.k[0] && k2 < o.k[n - 1] && k[k.length - 1] < k2) k.push(k2), P.push(at(o, k2)), E.push(atErr(k2));
+    const out = { kind: "table", k, P, P_err: E };
+    if (k2 === null && o.tail) out.tail = o.tail;
+    return out;
+  }
+
   async function computeAdhesion() {
     if (!psd) return;
     api.clearErrors();
@@ -291,7 +319,12 @@ const LJTopo = (() => {
       api.showFieldError("topo-k1", "k1 must be a number (1/m)");
       return;
     }
-    const body = { psd: spectrum(psd, k1, k2), material: m, units: "SI" };
+    if (measured.length && !psd.psd) {
+      $("readout-topo-adhesion").textContent = "The combination has no psd object (see its warnings): no adhesion.";
+      return;
+    }
+    /* several maps: the combined psd object (from the theory's k1 when the combine had the material) */
+    const body = { psd: measured.length ? cut(psd.psd, k1, k2) : spectrum(psd, k1, k2), material: m, units: "SI" };
     const text = JSON.stringify(body);
     const p = api.panels.topo;
     p.requests.push({ endpoint: "adhesion", text, label: "adhesion" });
@@ -332,5 +365,5 @@ const LJTopo = (() => {
     for (const id of ["topo-k1", "topo-k2"]) $(id).addEventListener("change", () => psd && draw());
   }
 
-  return { init, spectrum, query, refused, psdObject, combinedCSV };
+  return { init, spectrum, cut, query, refused, psdObject, combinedCSV };
 })();

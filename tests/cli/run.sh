@@ -184,6 +184,19 @@ check "combine: a psd object and an answer, --points-per-decade" jq_true \
     '.k | length > 2 and (.[1] / .[0] - 1.5849 | fabs) < 1e-3'
 run combine --request "$tmp/psd-text.json" "$tmp/obj2.json"
 check "combine --request prints the request" jq_true '(.psds | length) == 2 and (.psds[1].P_err | length) > 2'
+run combine --request "$tmp/psd-text.json" "$tmp/psd2.json"
+jq -c .psd "$tmp/psd2.json" >"$tmp/psd2-obj.json"
+check "combine --request: each answer's psd object as it is (its first knot below its first bin)" \
+    eval 'jq -e --slurpfile p "$tmp/psd2-obj.json" --slurpfile a "$tmp/psd2.json" \
+        ".psds[1] == \$p[0] and .psds[1].k[0] < ([\$a[0].k[] | select(. >= \$a[0].reliable.k_min)][0])" "$tmp/out" >/dev/null'
+jq -c '.psd = null' "$tmp/psd2.json" >"$tmp/null2.json"
+run combine "$tmp/psd-text.json" "$tmp/null2.json"
+check "combine: an answer whose psd is null exits 2 and says so" eval 'rc_is 2 &&
+    grep -q "document 2: its \"psd\" is null" "$tmp/err"'
+jq -c 'del(.psd.P_err)' "$tmp/psd2.json" >"$tmp/noerr2.json"
+run combine "$tmp/psd-text.json" "$tmp/noerr2.json"
+check "combine: an answer whose psd object has no P_err exits 2 and says so" eval 'rc_is 2 &&
+    grep -q "has no P_err" "$tmp/err"'
 jq -c '.P_err[1] = -1' "$tmp/obj2.json" >"$tmp/bad2.json"
 run combine "$tmp/psd-text.json" "$tmp/bad2.json"
 check "combine: a negative P_err is exit 1, 422 at /psds/1/P_err/1" eval 'rc_is 1 &&

@@ -7,7 +7,8 @@
 // readouts; a 422 problem lands beside the field its pointer names; exports (CSV, JSON, PNG,
 // "copy as curl" re-run with curl gives the same numbers); a measured topography: upload, its PSD
 // and fit, k1/k2 picked on the plot, the adhesion of the spectrum; several maps combined (each
-// one's PSD, the combination with its error band, its CSV); not a single console error
+// one's PSD sent as its psd object, the combination with its error band, its CSV; with a material
+// the combine's domain and the adhesion of its psd object, as is and cut to k1, k2); not a single console error
 // (the icon included); no request leaves the local server. Leaves screenshots in
 // $BUILD/web-screenshot*.png.
 // Chromium logs every 4xx answer the page fetches as a console error ("Failed to load
@@ -414,6 +415,9 @@ test("several measured maps: each one's PSD, their combination with its error ba
   assert.deepEqual(json.requests.map((r) => r.label), ["psd coarse-10nm.txt", "psd fine-2nm.txt", "psd/combine"]);
   assert.equal(json.requests[2].body.psds.length, 2);
   assert.ok(json.requests[2].body.psds.every((x) => x.P_err.length === x.k.length));
+  // each /v1/psd answer's psd object as it is (no table of the page's own)
+  assert.deepEqual(json.requests[2].body.psds, [json.answers[0].psd, json.answers[1].psd]);
+  assert.equal(json.requests[2].body.material, undefined);
   // the combination's CSV, with units
   const [dl] = await Promise.all([page.waitForEvent("download"), page.click("#topo-combined-csv")]);
   const csv = fs.readFileSync(await dl.path(), "utf8").split("\n");
@@ -421,13 +425,41 @@ test("several measured maps: each one's PSD, their combination with its error ba
   assert.ok(csv.includes("k [1/m],P [m^4],P_err [m^4],inputs"));
   const answer = json.answers[2];
   assert.equal(csv.filter((l) => /^\d/.test(l)).length, answer.k.length);
-  // the adhesion of the combined spectrum takes its points
+  // with a material: the combine takes it (not /v1/psd), answers the domain, and the adhesion
+  // sends the combined psd object from the domain's k1
   await page.check("#use-material");
   await page.fill("#E_star", "1e11");
-  await page.fill("#topo-k1", String(answer.k[2]));
+  await page.evaluate(() => (document.getElementById("status-text").textContent = ""));
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^Combined PSD|refused|failed/.test(document.getElementById("status-text").textContent));
+  const jm = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  assert.deepEqual(jm.requests.map((r) => r.label), ["psd coarse-10nm.txt", "psd fine-2nm.txt", "psd/combine"]);
+  assert.equal(jm.requests[2].body.material.E_star, 1e11);
+  const cm = jm.answers[2];
+  assert.ok(cm.domain && cm.si, "the combine's domain and si");
+  assert.equal(cm.psd.k[0], cm.domain.k1);
+  assert.match(await page.textContent("#readout-topo"), /theory's domain k > k0\/χ = .* the psd object starts at k1 = /);
+  assert.equal(Number(await page.inputValue("#topo-k1")), Number(cm.domain.k1.toPrecision(6)));
+  await page.fill("#topo-k1", String(cm.psd.k[0]));
   await page.click("#topo-adhesion");
   await page.waitForFunction(() => /^Adhesion of the measured|refused/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
   assert.match(await page.textContent("#status-text"), /Δγeff\/Δγ = /);
+  const ja = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  const adh = ja.requests[ja.requests.length - 1];
+  assert.equal(adh.label, "adhesion");
+  assert.deepEqual(adh.body.psd, cm.psd, "the adhesion takes the combined psd object");
+  // k1 and k2 changed: that psd object cut to them, P_err kept
+  await page.fill("#topo-k1", String(cm.psd.k[2]));
+  await page.fill("#topo-k2", String(cm.psd.k[cm.psd.k.length - 2]));
+  await page.click("#topo-adhesion");
+  await page.waitForFunction(() => /^Adhesion of the measured|refused/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  const jc = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  const cutPsd = jc.requests[jc.requests.length - 1].body.psd;
+  assert.deepEqual(cutPsd.k, cm.psd.k.slice(2, -1));
+  assert.deepEqual(cutPsd.P_err, cm.psd.P_err.slice(2, -1));
+  assert.equal(cutPsd.tail, undefined);
+  await page.fill("#topo-k1", String(cm.psd.k[0]));
+  await page.fill("#topo-k2", "");
   await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-combine.png"), fullPage: false });
   await page.setViewportSize({ width: 390, height: 844 });
