@@ -60,7 +60,7 @@ static void usage(FILE *f)
         "                        working memory (estimated before they start), the answer\n"
         "                        cache (at most a sixteenth) and running simulations: what does\n"
         "                        not fit now waits or gets 503 + Retry-After, what could never\n"
-        "                        fit gets 413 naming the limit\n"
+        "                        fit gets 413 naming the limit. At least 32M\n"
         "Simulation jobs\n"
         "  --job-workers N       simulation jobs running at once, each on its own thread\n"
         "                        (default 1)\n"
@@ -251,7 +251,7 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             bad = parse_seconds(optarg, 3600, &c->jobs.lease_seconds) || c->jobs.lease_seconds < 1;
             break;
         case 'M':
-            bad = budget_parse_size(optarg, &c->max_memory) || c->max_memory < ((size_t)8 << 20);
+            bad = budget_parse_size(optarg, &c->max_memory) || c->max_memory < ((size_t)32 << 20);
             break;
         case 'h':
             usage(stdout);
