@@ -18,6 +18,13 @@
  *
  * Responses are only ever queued from the I/O thread, inside the access handler; the pool's
  * threads only call MHD_resume_connection, which libmicrohttpd allows from any thread.
+ *
+ * Memory. Before a computation is submitted its working memory is estimated from the request
+ * (memest.h: from the body's length, or a text matrix's count of values); the pool reserves it
+ * in the budget when the task gets a slot and gives it back when the work returns, so a task
+ * that does not fit waits as for a slot (503 after --queue-wait, saying memory was the reason).
+ * One that could never fit, more than the budget leaves beside the cache and a full share of
+ * bodies (compute_memory_max), is 413 at once. Cached answers need none.
  */
 #include "daemon.h"
 
