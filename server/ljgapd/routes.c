@@ -20,6 +20,10 @@
  * then result or problem; a done job's result as CSV when Accept asks for text/csv), DELETE cancels
  * it (200 once it has ended, 202 while it is still stopping). /problems/TYPE are the pages the
  * problem types point at.
+ *
+ * A simulation whose working memory (its n x n grid on --job-threads threads, memest.h, and its
+ * result) could never fit the memory budget is refused at submission with 413, whichever store
+ * keeps the jobs; a worker reserves it before running the job, waiting while it does not fit.
  */
 #include "daemon.h"
 #include "jobstatus.h"
