@@ -191,6 +191,7 @@ enum MHD_Result respond_no_memory(struct MHD_Connection *c, request *r, const ch
     char detail[240], a[32], m[32];
     budget_format(need, a, sizeof a);
     budget_format(srv.cfg.max_memory, m, sizeof m);
+    snprintf(r->note, sizeof r->note, " (memory budget in use: %s refused)", a);
     snprintf(detail, sizeof detail,
              "%s needs %s of memory and the server's memory budget (--max-memory %s) is in use "
              "by other requests now: retry after the given seconds",

@@ -99,6 +99,7 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     case POOL_EXPIRED:
         if (w->t.starved) {
             char m[32];
+            snprintf(r->note, sizeof r->note, " waited=%.2fs for memory", w->t.waited_s);
             budget_format(srv.cfg.max_memory, m, sizeof m);
             snprintf(detail, sizeof detail,
                      "waited %.0f s (the --queue-wait limit) for a compute slot and the memory "

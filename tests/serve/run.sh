@@ -366,6 +366,33 @@ if start mem --max-memory 64M --compute-slots 2 --queue-wait $((10 * SLOW)); the
 else
     echo "not ok - ljgapd --max-memory 64M did not start"
 fi
+# A computation that does not fit waits for memory as for a slot, and gets 503 after
+# --queue-wait: three Monte Carlo requests (16 MiB each with 4 slots) hold 48 of the 60 MiB the
+# cache's bound leaves, so an 8 MB map (its body and 23 MiB) waits although a slot is free;
+# once they are cancelled (their clients give up), the map computes.
+if start memq --max-memory 64M --compute-slots 4 --queue-wait "$SLOW"; then
+    holders=()
+    for seed in 1 2 3; do
+        curl -s --max-time $((4 * SLOW)) -o /dev/null -H "$H" \
+            --data-binary "${LONG%\}},\"seed\":$seed}" "$URL/v1/adhesion" &
+        holders+=($!)
+    done
+    check "three long computations hold three of four slots and their memory" \
+        wait_health 5 '.compute.running == 3 and .memory.used > .memory.cache + 50000000'
+    req POST '/v1/psd?dx=1e-6' -H 'Content-Type: text/plain' --data-binary "@$tmp/map8.txt"
+    check "a map that does not fit beside them waits, then 503 + Retry-After naming the memory" \
+        eval '[ "$STATUS" = 503 ] && [ -n "$(hdr Retry-After)" ] &&
+              json ".detail | test(\"memory\") and test(\"max-memory\")"'
+    wait "${holders[@]}"
+    check "once they are gone it computes (200)" eval \
+        'wait_health 5 ".compute.running == 0" &&
+         req POST "/v1/psd?dx=1e-6" -H "Content-Type: text/plain" --data-binary "@$tmp/map8.txt" &&
+         [ "$STATUS" = 200 ]'
+    stop
+    check "SIGTERM: exit 0 ($RC)" [ "$RC" = 0 ]
+else
+    echo "not ok - ljgapd --max-memory 64M --compute-slots 4 did not start"
+fi
 check "bad --max-memory is refused with status 2" \
     eval '"$BIN" --max-memory 1T >/dev/null 2>&1; [ $? = 2 ] &&
           "$BIN" --max-memory 1M >/dev/null 2>&1; [ $? = 2 ]'
