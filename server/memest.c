@@ -5,20 +5,18 @@
 
 #define MIB ((size_t)1 << 20)
 
-static int is_sep(char c)
-{
-    /* topo_text.c's separators: white space, line ends, commas; '#' starts a comment */
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f' || c == ',' ||
-           c == '#';
-}
+/* topo_text.c's separators: white space, line ends, commas; '#' starts a comment */
+static const unsigned char sep[256] = {
+    [' '] = 1, ['\t'] = 1, ['\r'] = 1, ['\n'] = 1, ['\v'] = 1, ['\f'] = 1, [','] = 1, ['#'] = 1};
 
 void ljgap_token_feed(ljgap_token_count *tc, const char *data, size_t n)
 {
+    const unsigned char *p = (const unsigned char *)data;
     size_t t = tc->tokens;
     int in = tc->inside;
     for (size_t i = 0; i < n; i++) {
-        int s = is_sep(data[i]);
-        t += !s && !in;
+        int s = sep[p[i]];
+        t += !s & !in;
         in = !s;
     }
     tc->tokens = t;
