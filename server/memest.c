@@ -28,9 +28,17 @@ size_t ljgap_memest_psd_text(size_t values)
     return 40 * values + 4 * MIB;
 }
 
-size_t ljgap_memest_json(size_t len, unsigned threads)
+size_t ljgap_json_values(const char *body, size_t len)
 {
-    return 72 * len + 8 * MIB + 2 * MIB * (size_t)(threads ? threads : 1);
+    size_t n = 1;
+    for (size_t i = 0; i < len; i++)
+        n += body[i] == '[' || body[i] == ',' || body[i] == ':';
+    return n;
+}
+
+size_t ljgap_memest_json(size_t len, size_t values, unsigned threads)
+{
+    return 128 * values + 2 * len + 8 * MIB + 2 * MIB * (size_t)(threads ? threads : 1);
 }
 
 size_t ljgap_memest_sim(int n, unsigned threads)

@@ -13,11 +13,12 @@
  *                          16 ny) and keeps a bin index (2 bytes a point): 33 bytes a height
  *                          and FFTW's scratch are bounded by 40, plus 4 MiB for the plan, the
  *                          bins and the answer.
- *   a JSON request         cJSON holds every value of the body in a node (at most one per 2
- *                          bytes, 64 + 16 bytes each), the parsed arrays as doubles, a height
- *                          map in JSON as the text PSD above: 72 bytes a body byte, plus 8 MiB
- *                          for the solvers' work arrays (at most --max-points values each) and
- *                          2 MiB for each thread of a sweep.
+ *   a JSON request         cJSON holds every value of the body in a node (64 bytes and the
+ *                          allocator's 16), the request copies arrays as doubles (8), a height
+ *                          map in JSON is then computed as the text PSD above (40): 128 bytes a
+ *                          value, plus twice the body (strings, the cache's key), 8 MiB for the
+ *                          solvers' work arrays (at most --max-points values each) and 2 MiB for
+ *                          each thread of a sweep.
  *   a simulation           each of its threads has a workspace of 14 real n x n arrays, one
  *                          real and three complex n x (n/2+1) arrays (core/simsolve.c); the run
  *                          shares four more n x n arrays (plans, the PSD's weights), plus 4 MiB.
@@ -38,8 +39,12 @@ void ljgap_token_feed(ljgap_token_count *tc, const char *data, size_t n);
 
 /* Bytes a text PSD of `values` heights needs at most. */
 size_t ljgap_memest_psd_text(size_t values);
-/* Bytes a JSON computation with a body of len bytes needs at most (threads: of a sweep). */
-size_t ljgap_memest_json(size_t len, unsigned threads);
+/* An upper bound of the values in a JSON body (cJSON's nodes): every value but the root follows
+ * a '[', ',' or ':' (those inside strings only add to the bound). */
+size_t ljgap_json_values(const char *body, size_t len);
+/* Bytes a JSON computation with a body of len bytes and at most `values` values needs at most
+ * (threads: of a sweep). */
+size_t ljgap_memest_json(size_t len, size_t values, unsigned threads);
 /* Bytes a simulation on an n x n grid with `threads` threads needs at most. */
 size_t ljgap_memest_sim(int n, unsigned threads);
 /* A simulation request's n and realizations from its JSON body (the defaults 64 and 4 when

@@ -247,7 +247,9 @@ enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
         free(key);
         return ret;
     }
-    if (over_budget(c, r, ljgap_memest_json(r->len, srv.cfg.slots), &ret)) {
+    if (over_budget(c, r,
+                    ljgap_memest_json(r->len, ljgap_json_values(r->body, r->len), srv.cfg.slots),
+                    &ret)) {
         free(key);
         return ret;
     }

@@ -4,8 +4,9 @@
  * VmHWM; the growth over VmRSS before the run must be at most the estimate, and the estimate
  * at most FACTOR times the growth plus SLACK (an estimate that asks for far more than it needs
  * would refuse requests that fit). Cases: text PSDs of a map and of a profile, a JSON
- * computation, simulations on 64² and 128² grids on one and two threads. The token count of
- * a body fed in pieces equals that of the whole. (Not measured under the address sanitizer.) */
+ * computation, a height map in JSON near the body limit, simulations on 64² and 128² grids on one
+ * and two threads. The token count of a body fed in pieces equals that of the whole. (Not measured
+ * under the address sanitizer.) */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -139,22 +140,60 @@ static void test_tokens_in_pieces(void **state)
 
 typedef struct {
     const char *body;
+    const char *endpoint;
 } json_case;
 
 static void run_json(const void *arg)
 {
     const json_case *j = arg;
     ljgap_reply rep;
-    ljgap_handle("adhesion", j->body, strlen(j->body), &rep);
+    ljgap_handle(j->endpoint, j->body, strlen(j->body), &rep);
+    if (rep.status != 200) fprintf(stderr, "status %d: %.300s\n", rep.status, rep.body);
     ljgap_reply_free(&rep);
+}
+
+/* Height maps in JSON near the 1 MiB body limit, where the body's values dominate the estimate:
+ * 256 x 256 heights as "%.6e", and 512 x 512 one-digit heights (the most values a body holds). */
+static void test_json_map(void **state)
+{
+    const size_t n[] = {256, 512}, cap = 1 << 20;
+    for (int c = 0; c < 2; c++) {
+        json_case j = {NULL, "psd"};
+        char *b = malloc(cap), what[64];
+        size_t k = 0;
+        double h = 0;
+        srand(26);
+        k += (size_t)snprintf(b + k, cap - k, "{\"topography\":{\"dx\":1e-6,\"heights\":[");
+        for (size_t r = 0; r < n[c]; r++) {
+            k += (size_t)snprintf(b + k, cap - k, "%s[", r ? "," : "");
+            for (size_t i = 0; i < n[c]; i++) {
+                h += 1e-8 * ((double)rand() / RAND_MAX - 0.5);
+                if (c == 0)
+                    k += (size_t)snprintf(b + k, cap - k, "%s%.6e", i ? "," : "", h);
+                else
+                    k += (size_t)snprintf(b + k, cap - k, "%s%d", i ? "," : "", rand() % 10);
+            }
+            k += (size_t)snprintf(b + k, cap - k, "]");
+        }
+        snprintf(b + k, cap - k, "]}}");
+        j.body = b;
+        assert_true(strlen(b) < cap - 1);
+        snprintf(what, sizeof what, "JSON psd, %zu x %zu heights in %zu bytes", n[c], n[c],
+                 strlen(b));
+        assert_int_equal(measured(what, run_json, &j,
+                                  ljgap_memest_json(strlen(b), ljgap_json_values(b, strlen(b)), 1)),
+                         0);
+        free(b);
+    }
 }
 
 static void test_json(void **state)
 {
     json_case j = {"{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":1,\"m0\":0.5},\"method\":"
-                   "\"montecarlo\",\"samples\":100000}"};
+                   "\"montecarlo\",\"samples\":100000}",
+                   "adhesion"};
     /* a small body: the fixed allowance is the whole estimate, so only the bound is checked */
-    size_t est = ljgap_memest_json(strlen(j.body), 1);
+    size_t est = ljgap_memest_json(strlen(j.body), ljgap_json_values(j.body, strlen(j.body)), 1);
     int r = measured("JSON adhesion (Monte Carlo)", run_json, &j, est);
     assert_true(r == 0 || r == 2);
 }
@@ -207,6 +246,7 @@ int main(void)
         cmocka_unit_test(test_tokens_in_pieces),
         cmocka_unit_test(test_text_psd),
         cmocka_unit_test(test_json),
+        cmocka_unit_test(test_json_map),
         cmocka_unit_test(test_sim),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
