@@ -17,7 +17,8 @@ FUZZ_BIN := $(FUZZ_DIR)/fuzz_handler
 FUZZ_REPLAY := $(FUZZ_DIR)/replay
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
 # The same sources as the libraries (the Makefile's lists are set after this file is read).
-FUZZ_SRC := $(wildcard core/*.c) $(filter-out server/cli.c,$(wildcard server/*.c))
+FUZZ_SRC := $(wildcard core/*.c) $(filter-out server/cli.c,$(wildcard server/*.c)) \
+            server/ljgapd/budget.c
 FUZZ_OBJ := $(FUZZ_SRC:%.c=$(FUZZ_DIR)/obj/%.o)
 
 TEST_PREP += $(FUZZ_REPLAY)
@@ -42,7 +43,7 @@ $(FUZZ_BIN): $(FUZZ_DIR)/obj/tests/fuzz/fuzz_handler.o $(FUZZ_OBJ)
 	$(Q)$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer $^ $(LDLIBS) -o $@
 
 $(FUZZ_REPLAY): $(BUILD)/tests/fuzz/replay.o $(BUILD)/tests/fuzz/fuzz_handler.o \
-                $(BUILD)/libljgap_server.a $(BUILD)/libljgap.a
+                $(BUILD)/libljgapd.a $(BUILD)/libljgap_server.a $(BUILD)/libljgap.a
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@

@@ -40,14 +40,21 @@ static const ljgap_problem_doc docs[] = {
      "when it is there and the JSON status otherwise, send Accept: text/csv, "
      "application/json;q=0.5."},
     {"content-too-large", 413, "Content too large",
-     "The request body is larger than the server accepts (1 MiB by default).",
+     "The request body is larger than the server accepts (1 MiB by default; 64 MiB for a "
+     "height matrix sent to /v1/psd as text), or the request could never fit the server's "
+     "memory budget (--max-memory): a body larger than the share bodies may hold, or a "
+     "computation or simulation whose working memory is larger than one may hold. The detail "
+     "names the limit.",
      "Send fewer points: a table PSD of at most 10 000 rows, at most 10 000 mean gaps or "
-     "sweep values. Thin out a measured spectrum before sending it."},
+     "sweep values. Thin out a measured spectrum or a height map before sending it; for a "
+     "simulation, a smaller n. The server's operator can raise --max-memory."},
     {"unsupported-media-type", 415, "Unsupported media type",
-     "The body was not declared as JSON. Compute requests must say Content-Type: "
-     "application/json (curl's -d alone sends application/x-www-form-urlencoded).",
+     "The body was not declared as a type the path takes. Compute requests must say "
+     "Content-Type: application/json (curl's -d alone sends "
+     "application/x-www-form-urlencoded); /v1/psd also takes a height matrix as text/plain "
+     "or text/csv. The Accept-Post header of the answer lists the types.",
      "Add the header Content-Type: application/json (curl -H 'Content-Type: "
-     "application/json')."},
+     "application/json'), or one of the types in Accept-Post."},
     {"validation", 422, "Invalid request",
      "The body is valid JSON but some values are not: a missing or unknown field, a wrong "
      "type, a number out of range, a spectrum outside the theory (k1 at or below k0 = "
@@ -81,7 +88,9 @@ static const ljgap_problem_doc docs[] = {
      "default) without a free compute slot, or the wait queue was already full (--queue, 64 "
      "by default), or this client already has --client-connections requests in progress "
      "behind a proxy, or the queue of simulation jobs is full, or the server is shutting "
-     "down. Slots go to the waiting client that holds the fewest, so one person's batch "
+     "down, or its memory budget (--max-memory) is in use by other requests: a body that "
+     "does not fit now is refused before it is read, a computation waits for memory as for a "
+     "slot. Slots go to the waiting client that holds the fewest, so one person's batch "
      "cannot starve another.",
      "Retry after the number of seconds in the Retry-After header (an estimate of the queue "
      "ahead). The page does this by itself. A script sending many requests at once can send "

@@ -15,12 +15,15 @@
 
 static void usage(FILE *f)
 {
+    char here[32];
+    budget_format(budget_default_limit(), here, sizeof here);
     fprintf(
         f,
         "usage: ljgapd [--port N] [--bind ADDR] [--web DIR] [--compute-slots N] [--queue N]\n"
         "              [--queue-wait S] [--max-seconds S] [--connections N]\n"
         "              [--client-connections N] [--trust-proxy]\n"
         "              [--state-dir DIR | --jobs-db postgresql://...] [--job-lease S]\n"
+        "              [--max-memory SIZE]\n"
         "              [more: see below]\n"
         "Serves the ljgap calculations over HTTP (see /openapi.json).\n"
         "Listening\n"
@@ -50,6 +53,14 @@ static void usage(FILE *f)
         "  --io-threads N        threads serving connections, epoll each (default 1; the\n"
         "                        connection limit is split between them)\n"
         "  --max-body N          largest request body in bytes (default 1048576)\n"
+        "Memory\n"
+        "  --max-memory SIZE     the memory budget, suffixes K, M, G (default: the smaller of\n"
+        "                        2G and a quarter of physical memory; here %s). It bounds\n"
+        "                        request bodies (at most half of it at once), computations'\n"
+        "                        working memory (estimated before they start), the answer\n"
+        "                        cache (at most a sixteenth) and running simulations: what does\n"
+        "                        not fit now waits or gets 503 + Retry-After, what could never\n"
+        "                        fit gets 413 naming the limit. At least 32M\n"
         "Simulation jobs\n"
         "  --job-workers N       simulation jobs running at once, each on its own thread\n"
         "                        (default 1)\n"
@@ -76,7 +87,8 @@ static void usage(FILE *f)
         "                        (default 30); a job whose ljgapd died is run again from the\n"
         "                        start by another (or the next) ljgapd once its lease lapses\n"
         "The first line on stdout is 'listening on http://HOST:PORT/'; one log line per\n"
-        "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n");
+        "request goes to stderr. SIGINT/SIGTERM stop it within 10 s.\n",
+        here);
 }
 
 static int parse_uint(const char *s, unsigned lo, unsigned hi, unsigned *out)
@@ -121,6 +133,7 @@ static void defaults(ljgapd_config *c)
     c->max_body = (size_t)1 << 20;
     c->cache_entries = 1024;
     c->cache_bytes = (size_t)64 << 20;
+    c->max_memory = budget_default_limit();
     c->grace_s = 7.0;
     c->stop_s = 9.5;
     ljgap_jobs_config_default(&c->jobs);
@@ -155,6 +168,7 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
         {"state-dir", required_argument, NULL, 'D'},
         {"jobs-db", required_argument, NULL, 'J'},
         {"job-lease", required_argument, NULL, 'L'},
+        {"max-memory", required_argument, NULL, 'M'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -235,6 +249,9 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv)
             break;
         case 'L':
             bad = parse_seconds(optarg, 3600, &c->jobs.lease_seconds) || c->jobs.lease_seconds < 1;
+            break;
+        case 'M':
+            bad = budget_parse_size(optarg, &c->max_memory) || c->max_memory < ((size_t)32 << 20);
             break;
         case 'h':
             usage(stdout);

@@ -12,15 +12,18 @@
  *   reply.c   the only code that creates responses (respond_json, respond_problem, ...)
  *   pool.c   compute slots, the fair wait queue, cancel on hang-up (MHD-free)
  *   conns.c   connection records: slow senders, per-client counts (MHD-free)
+ *   budget.c  the memory budget (--max-memory): bytes reserved before use (MHD-free)
  */
 #ifndef LJGAPD_DAEMON_H
 #define LJGAPD_DAEMON_H
 
+#include "budget.h"
 #include "conns.h"
 #include "handler.h"
 #include "http_cache.h"
 #include "jobs.h"
 #include "jobstore.h"
+#include "memest.h"
 #include "pool.h"
 
 #include <microhttpd.h>
@@ -48,7 +51,9 @@ typedef struct {
     int trust_proxy;             /* the client is named by X-Forwarded-For (default off) */
     size_t max_body;             /* largest accepted request body in bytes (1 MiB) */
     size_t cache_entries;        /* answer cache bound in entries (1024) */
-    size_t cache_bytes;          /* answer cache bound in bytes (64 MiB) */
+    size_t cache_bytes;          /* answer cache bound in bytes (64 MiB, at most max_memory/16) */
+    size_t max_memory;           /* the memory budget in bytes (--max-memory; default the smaller
+                                  * of 2 GiB and a quarter of physical memory) */
     double grace_s;              /* shutdown: seconds in-flight work may run (7) */
     double stop_s;               /* shutdown: seconds after the signal at which we stop (9.5) */
     ljgap_jobs_config jobs;      /* simulation jobs: workers, queue, finished jobs kept */
@@ -73,6 +78,9 @@ typedef struct {
     pool *slots;             /* compute slots and their wait queue */
     pool *ops;               /* threads for job-store calls (they may wait on the store) */
     conns *conns;            /* connection records */
+    budget *mem;             /* the memory budget: bodies, computations, the cache, jobs */
+    budget *bodies;          /* request bodies' share of it (half of what the cache leaves) */
+    size_t pinned;           /* bytes of mem held for good (the answer cache's bound) */
     int web_fd;              /* open directory cfg.web, or -1 */
     atomic_uint inflight;    /* requests begun and not yet reported complete */
     atomic_int stopping;     /* set once a signal asked us to stop */
@@ -112,6 +120,11 @@ typedef struct {
     ljgap_param *params;          /* a text body's query parameters (owned, decoded), or NULL */
     size_t nparams;               /* entries in params */
     int too_large;                /* the body outgrew its limit: answer 413 */
+    int no_memory;                /* the body outgrew the memory budget: answer 503 */
+    int close;                    /* close the connection after the answer (body left unread) */
+    size_t held;                  /* bytes of the body reserved in srv.bodies */
+    ljgap_token_count tokens;     /* a text body's values so far (memest.h) */
+    size_t mem;                   /* its computation's estimate, reserved when it gets a slot */
     size_t discarded;             /* body bytes dropped since (or after an early answer) */
     work_task *task;              /* its work while it waits, runs, or has just ended */
 } request;
@@ -215,6 +228,17 @@ enum MHD_Result respond_static(struct MHD_Connection *c, request *r, const void 
                                const char *ctype, const char *etag, const char *if_none_match);
 /* 413: the request body is over cfg.max_body. */
 enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r);
+/* 413 for memory: what the request needs (need bytes) can never fit the budget, whose part
+ * (what bytes) is named in the detail. */
+enum MHD_Result respond_over_budget(struct MHD_Connection *c, request *r, size_t need,
+                                    const char *what, size_t bytes);
+/* 503 + Retry-After: the memory budget is in use now (what: "the request body", ...). */
+enum MHD_Result respond_no_memory(struct MHD_Connection *c, request *r, const char *what,
+                                  size_t need);
+
+/* Bytes of the budget one computation or simulation may reserve at most: what is left beside
+ * the pinned cache and a full share of bodies (its own body is in that share). */
+size_t compute_memory_max(void);
 
 /* Seconds since t0 (CLOCK_MONOTONIC). */
 double seconds_since(const struct timespec *t0);

@@ -12,11 +12,17 @@
  *     each address to --client-connections connections; with it, every connection comes from
  *     the proxy, so each forwarded client may have --client-connections requests in progress
  *     and the next is answered 503.
- *   - bodies: body routes must say Content-Type: application/json (else 415) and carry at most
- *     --max-body bytes (413, decided from Content-Length before reading, or while reading a
- *     chunked body, when the buffer would grow past the limit). A route with text_max also
- *     takes text/plain or text/csv up to that many bytes; its query parameters are copied then
- *     (decoded by libmicrohttpd) for the work on a compute slot.
+ *   - bodies: body routes must say Content-Type: application/json (else 415 with Accept-Post,
+ *     decided before the size) and carry at most --max-body bytes (413, decided from
+ *     Content-Length before reading, or while reading a chunked body, when the buffer would
+ *     grow past the limit). A route with text_max also takes text/plain or text/csv up to that
+ *     many bytes; its query parameters are copied then (decoded by libmicrohttpd) for the work
+ *     on a compute slot, and its values are counted as they arrive (memest.h).
+ *   - memory: a body's bytes are reserved in the budget's share for bodies (budget.h) before
+ *     they are read: from Content-Length at the first call (one that does not fit is answered
+ *     503 + Retry-After unread, and the connection closed, as for 413; one larger than the
+ *     whole share is 413), or as a chunked body's buffer grows (past the budget: the body is
+ *     dropped and 503 answered at its end). They are given back when the request ends.
  *   - the log: one line per request on stderr when libmicrohttpd reports it complete: method,
  *     path, status, milliseconds, request id, and notes (time waited for a slot, a client that
  *     went away). X-Request-Id is echoed when the client sends a sane one,
@@ -137,7 +143,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
 {
     const char *clen, *ctype;
     unsigned long long want = 0;
-    char detail[120];
+    char detail[200];
 
     if (srv.cfg.trust_proxy) {
         if (!conns_client_enter(srv.conns, r->client, srv.cfg.client_connections)) {
@@ -163,53 +169,87 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     r->limit = r->text ? r->route->text_max : srv.cfg.max_body;
     clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (clen) want = strtoull(clen, NULL, 10);
-    if (want > r->limit) return respond_too_large(c, r);
-    if (!r->text && !is_json_type(ctype))
-        return respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE,
-                               r->route->text_max
-                                   ? "send the request as Content-Type: application/json, or "
-                                     "the height matrix as text/plain or text/csv"
-                                   : "send the request as Content-Type: application/json",
-                               NULL, NULL);
-    if (r->text && query_copy(c, r)) return MHD_NO;
-    conns_receiving(srv.conns, r->rec);
-    if (want) {
-        r->body = malloc(want + 1);
-        if (!r->body) return MHD_NO;
-        r->cap = want + 1;
+    if (!r->text && !is_json_type(ctype)) {
+        /* the type first: a body the route never takes is 415 whatever its size */
+        const char *types =
+            r->route->text_max ? "application/json, text/plain, text/csv" : "application/json";
+        r->close = want > 0; /* its body is not read */
+        snprintf(detail, sizeof detail, "%s takes %s (Accept-Post), not %.40s", r->route->path,
+                 types, ctype ? ctype : "a body without Content-Type");
+        return respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, detail, "Accept-Post", types);
     }
+    if (want > r->limit) {
+        r->close = 1;
+        return respond_too_large(c, r);
+    }
+    if (r->text && query_copy(c, r)) return MHD_NO;
+    if (want) {
+        /* reserved before a byte is read: a body that does not fit is refused unread */
+        size_t need = (size_t)want + 1;
+        if (need > budget_limit(srv.bodies)) {
+            r->close = 1;
+            return respond_over_budget(c, r, need, "the share of request bodies",
+                                       budget_limit(srv.bodies));
+        }
+        if (!budget_try(srv.bodies, need)) {
+            r->close = 1;
+            return respond_no_memory(c, r, "the request body", need);
+        }
+        r->held = need;
+        r->body = malloc(need);
+        if (!r->body) return MHD_NO;
+        r->cap = need;
+    }
+    conns_receiving(srv.conns, r->rec);
     return MHD_YES;
 }
 
-/* Append a chunk of body. A body that outgrows cfg.max_body is freed and the rest counted
- * and dropped (libmicrohttpd 0.9.75 cannot queue an answer while a body is arriving, so the
- * 413 goes out when the body ends); -1 (close the connection) if memory runs out or the client
- * goes on sending past DISCARD_FACTOR times the limit. */
+/* Frees the body and gives its bytes back to the budget. */
+static void body_free(request *r)
+{
+    free(r->body);
+    r->body = NULL;
+    budget_release(srv.bodies, r->held);
+    r->held = 0;
+    r->len = r->cap = 0;
+}
+
+/* Append a chunk of body. A body that outgrows its limit (or, growing without a
+ * Content-Length, the memory budget) is freed and the rest counted and dropped (libmicrohttpd
+ * 0.9.75 cannot queue an answer while a body is arriving, so the 413 or 503 goes out when the
+ * body ends); -1 (close the connection) if memory runs out or the client goes on sending past
+ * DISCARD_FACTOR times the limit. */
 static int request_take(request *r, const char *data, size_t n)
 {
     size_t limit = r->limit;
-    if (!r->too_large && !r->status && r->len + n > limit) {
+    if (!r->too_large && !r->no_memory && !r->status && r->len + n > limit) {
         r->too_large = 1;
-        free(r->body);
-        r->body = NULL;
         r->discarded = r->len;
-        r->len = r->cap = 0;
+        body_free(r);
     }
-    if (r->too_large || r->status) {
-        r->discarded += n;
-        return r->discarded > DISCARD_FACTOR * limit ? -1 : 0;
-    }
-    if (r->len + n + 1 > r->cap) {
+    if (r->len + n + 1 > r->cap && !r->too_large && !r->no_memory && !r->status) {
         size_t cap = r->cap ? r->cap : 4096;
         char *b;
         while (cap < r->len + n + 1)
             cap *= 2;
         if (cap > limit + 1) cap = limit + 1;
-        b = realloc(r->body, cap);
-        if (!b) return -1;
-        r->body = b;
-        r->cap = cap;
+        if (!budget_try(srv.bodies, cap - r->held)) {
+            r->no_memory = 1;
+            r->discarded = r->len;
+            body_free(r);
+        } else {
+            r->held = cap;
+            b = realloc(r->body, cap);
+            if (!b) return -1;
+            r->body = b;
+            r->cap = cap;
+        }
     }
+    if (r->too_large || r->no_memory || r->status) {
+        r->discarded += n;
+        return r->discarded > DISCARD_FACTOR * limit ? -1 : 0;
+    }
+    if (r->text) ljgap_token_feed(&r->tokens, data, n);
     memcpy(r->body + r->len, data, n);
     r->len += n;
     r->body[r->len] = '\0';
@@ -238,6 +278,11 @@ enum MHD_Result ljgapd_on_access(void *cls, struct MHD_Connection *c, const char
     if (r->status) return MHD_YES;
     conns_busy(srv.conns, r->rec);
     if (r->too_large) return respond_too_large(c, r);
+    if (r->no_memory) {
+        r->close = 1;
+        return respond_no_memory(c, r, "the request body, sent without Content-Length,",
+                                 r->discarded + 1);
+    }
     return r->route->answer(c, r);
 }
 
@@ -256,7 +301,7 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     if (r->counted) conns_client_leave(srv.conns, r->client);
     work_release(r);
     free(r->params);
-    free(r->body);
+    body_free(r);
     free(r);
     *con_cls = NULL;
     atomic_fetch_sub(&srv.inflight, 1);

@@ -28,6 +28,7 @@
 
 #include <arpa/inet.h>
 #include <errno.h>
+#include <malloc.h>
 #include <fcntl.h>
 #include <fftw3.h>
 #include <gsl/gsl_errno.h>
@@ -44,6 +45,7 @@
 #define FD_RESERVE 64 /* descriptors kept free of connections: files, the store, the listener */
 #define OPS_THREADS 2 /* threads for job-store calls */
 #define OPS_QUEUE 256 /* job-store calls waiting at most */
+#define CACHE_ENTRY_OVERHEAD 256 /* bytes an answer cache entry holds besides key and answer */
 
 ljgapd_server srv = {.web_fd = -1};
 
@@ -197,7 +199,7 @@ int main(int argc, char **argv)
     struct MHD_Daemon *d = NULL;
     ljgap_limits limits;
     sigset_t sigs;
-    char host[INET6_ADDRSTRLEN + 3], files[96], state_dir[4096];
+    char host[INET6_ADDRSTRLEN + 3], files[96], state_dir[4096], mem[32];
     struct timespec t_sig;
     MHD_socket lfd;
     ljgapd_config *cfg = &srv.cfg;
@@ -225,14 +227,28 @@ int main(int argc, char **argv)
         srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
     fit_file_limit(files, sizeof files);
 
-    slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait};
-    ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait};
+    /* The memory budget: the answer cache's bound (at most a sixteenth) is held for good;
+     * request bodies may hold half of the rest; computations and simulations reserve their
+     * estimates as they start, each at most the other half, so that one always fits beside a
+     * full share of bodies (nothing can wait for memory that only waiting requests hold). */
+    if (cfg->cache_bytes > cfg->max_memory / 16) cfg->cache_bytes = cfg->max_memory / 16;
+    srv.pinned = cfg->cache_bytes + cfg->cache_entries * CACHE_ENTRY_OVERHEAD;
+    if (srv.pinned > cfg->max_memory / 8) srv.pinned = cfg->max_memory / 8;
+    srv.mem = budget_new(cfg->max_memory, NULL);
+    srv.bodies = budget_new((cfg->max_memory - srv.pinned) / 2, srv.mem);
+    if (srv.mem) budget_try(srv.mem, srv.pinned);
+    /* Large blocks (bodies, heights, FFT arrays) are mapped and unmapped, never kept by malloc
+     * after they are freed: what the budget gives back is given back to the system. */
+    mallopt(M_MMAP_THRESHOLD, 256 * 1024);
+    slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait, srv.mem};
+    ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait, NULL};
     srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
     srv.jobs = ljgap_jobs_alloc(&cfg->jobs, srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
     srv.slots = pool_start(&slots_cfg);
     srv.ops = pool_start(&ops_cfg);
     srv.conns = conns_start(cfg->receive_s);
-    if (!srv.cache || !srv.jobs || !srv.slots || !srv.ops || !srv.conns) {
+    if (!srv.mem || !srv.bodies || !srv.cache || !srv.jobs || !srv.slots || !srv.ops ||
+        !srv.conns) {
         fprintf(stderr, "ljgapd: out of memory or threads\n");
         goto end;
     }
@@ -245,16 +261,17 @@ int main(int argc, char **argv)
     }
     d = daemon_start(host, sizeof host);
     if (!d) goto end;
+    budget_format(cfg->max_memory, mem, sizeof mem);
     printf("listening on http://%s:%u/\n", host, cfg->port);
     fflush(stdout);
     fprintf(stderr,
             "ljgapd %s: %u compute slots (queue %u, wait %g s, cap %g s each), %u connections "
-            "(%u per client%s), %s, %u I/O thread%s, %u job workers, web %s\n",
+            "(%u per client%s), %s, %u I/O thread%s, %u job workers, web %s, memory %s\n",
             LJGAP_VERSION, cfg->slots, cfg->queue, cfg->queue_wait, cfg->max_seconds,
             cfg->connections, cfg->client_connections,
             cfg->trust_proxy ? ", by X-Forwarded-For" : "", files, cfg->io_threads,
-            cfg->io_threads == 1 ? "" : "s", cfg->jobs.workers,
-            cfg->web ? cfg->web : "compiled in");
+            cfg->io_threads == 1 ? "" : "s", cfg->jobs.workers, cfg->web ? cfg->web : "compiled in",
+            mem);
 
     while (sigwait(&sigs, &sig) != 0)
         ;
@@ -292,5 +309,7 @@ end:
     ljgap_jobstore_close(srv.store);
     fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
     http_cache_free(srv.cache);
+    budget_free(srv.bodies);
+    budget_free(srv.mem);
     return rc;
 }

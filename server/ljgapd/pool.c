@@ -105,20 +105,22 @@ static unsigned held_by(const pool *s, const char *client)
     return n;
 }
 
-/* The waiting task to run next: fewest slots held by its client, earliest among equals. */
+/* The waiting task to run next: fewest slots held by its client, earliest among equals, among
+ * those whose memory can be reserved now (it is reserved here); NULL when none fits. */
 static pool_task *pick(const pool *s)
 {
-    pool_task *best = NULL;
-    unsigned best_held = 0;
+    unsigned top = 0;
     for (pool_task *t = s->waiting.head; t; t = t->next) {
         unsigned h = held_by(s, t->client);
-        if (!best || h < best_held) {
-            best = t;
-            best_held = h;
-            if (h == 0) break; /* nobody holds fewer; the earliest such task wins */
-        }
+        if (h > top) top = h;
     }
-    return best;
+    for (unsigned h = 0; h <= top; h++)
+        for (pool_task *t = s->waiting.head; t; t = t->next) {
+            if (held_by(s, t->client) != h) continue;
+            if (!s->cfg.mem || budget_try(s->cfg.mem, t->mem)) return t;
+            t->starved = 1;
+        }
+    return NULL;
 }
 
 static void start_task(pool *s, pool_task *t)
@@ -162,10 +164,11 @@ static void *slot_main(void *arg)
     for (;;) {
         pool_task *next;
         if (!t) {
-            while (!s->stopping && !s->waiting.head)
+            /* nothing waits, or nothing that waits fits the budget now (the watchdog and
+             * every ending task wake us to look again) */
+            while (!s->stopping && !(s->waiting.head && (t = pick(s))))
                 pthread_cond_wait(&s->work, &s->lock);
-            if (!s->waiting.head) break; /* stopping, and pool_stop ended every waiting task */
-            t = pick(s);
+            if (!t) break; /* stopping, and pool_stop ended every waiting task */
             start_task(s, t);
         }
         pthread_mutex_unlock(&s->lock);
@@ -174,7 +177,9 @@ static void *slot_main(void *arg)
 
         pthread_mutex_lock(&s->lock);
         t->ran_s = ljgap_now() - t->t_start;
+        if (s->cfg.mem) budget_release(s->cfg.mem, t->mem);
         next = s->waiting.head ? pick(s) : NULL; /* chosen while t still holds its slot */
+        if (s->waiting.head && s->cfg.mem) pthread_cond_broadcast(&s->work); /* bytes freed */
         list_remove(&s->running, t);
         t->state = T_ENDED;
         t->outcome = t->hung_up ? POOL_GONE : POOL_DONE;
@@ -240,6 +245,9 @@ static void *watch_main(void *arg)
                 s->stats.expired++;
             }
         }
+        /* bytes freed outside the pool (bodies) may let a waiting task fit an idle slot */
+        if (s->cfg.mem && s->waiting.head && s->running.n < s->n_threads)
+            pthread_cond_broadcast(&s->work);
         if (woken) {
             pthread_mutex_unlock(&s->lock);
             wake_all(woken);
@@ -300,6 +308,7 @@ pool_status pool_submit(pool *s, pool_task *t)
         t->waited_s = t->ran_s = 0;
         t->cancel = 0;
         t->hung_up = 0;
+        t->starved = 0;
         t->outcome = POOL_DONE;
         t->client[POOL_CLIENT_MAX - 1] = '\0';
         t->state = T_WAITING;

@@ -18,6 +18,12 @@
  * next check and frees its slot, and ends with outcome POOL_GONE. The same thread expires
  * tasks that waited longer than queue_wait (POOL_EXPIRED).
  *
+ * Memory. With a budget (pool_config.mem), a task also needs its t->mem bytes: the next free
+ * slot goes to the fairest waiting task whose bytes can be reserved now (the others keep
+ * waiting, as for a slot, and expire after queue_wait); the bytes go back when run(t) returns.
+ * Memory freed elsewhere (a request body) is noticed within POOL_POLL_MS. A task larger than
+ * the whole budget would only expire: the caller refuses it before submitting.
+ *
  *   pool *s = pool_start(&cfg);                     slot threads and the watchdog start
  *   t->run = ...; t->park = ...; t->wake = ...; t->client = "127.0.0.1"; t->fd = fd;
  *   switch (pool_submit(s, t)) ...                   POOL_OK: park(t) ran; wake(t) will run
@@ -27,6 +33,8 @@
  */
 #ifndef LJGAPD_POOL_H
 #define LJGAPD_POOL_H
+
+#include "budget.h"
 
 #include <stddef.h>
 
@@ -57,11 +65,13 @@ struct pool_task {
     void *arg;                    /* the caller's payload */
     char client[POOL_CLIENT_MAX]; /* who asked (fairness is between these keys) */
     int fd;                       /* socket polled for hang-ups, or -1 */
+    size_t mem;                   /* bytes reserved from the pool's budget while it runs */
     /* set by the scheduler */
     volatile int cancel;  /* raised to stop run(t) early (hang-up, stop) */
     pool_outcome outcome; /* valid in wake(t) */
     double waited_s;      /* seconds from submit to a slot (or to the end) */
     double ran_s;         /* seconds run(t) took (0 if it never ran) */
+    int starved;          /* it waited (also) because its memory did not fit the budget */
     /* private */
     pool_task *prev, *next;   /* the waiting or the running list */
     unsigned long serial;     /* submission number (identifies it to the watchdog) */
@@ -74,6 +84,8 @@ typedef struct {
     unsigned slots;     /* slot threads: computations at once (>= 1) */
     unsigned queue_cap; /* tasks waiting at most (0: none wait, busy means POOL_FULL) */
     double queue_wait;  /* seconds a task may wait for a slot (> 0) */
+    budget *mem;        /* a task gets a slot only once its t->mem bytes are reserved here
+                         * (released when run(t) returns); NULL: no budget */
 } pool_config;
 
 typedef struct pool pool;

@@ -45,7 +45,7 @@ static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
         snprintf(retry, sizeof retry, "%u", srv.cfg.retry_after);
         MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, retry);
     }
-    if (atomic_load(&srv.stopping))
+    if (atomic_load(&srv.stopping) || r->close)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
     ret = MHD_queue_response(c, (unsigned)status, resp);
     MHD_destroy_response(resp);
@@ -168,4 +168,33 @@ enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r)
     snprintf(detail, sizeof detail, "the request body is limited to %zu bytes",
              r->limit ? r->limit : srv.cfg.max_body);
     return respond_problem(c, r, MHD_HTTP_CONTENT_TOO_LARGE, detail, NULL, NULL);
+}
+
+enum MHD_Result respond_over_budget(struct MHD_Connection *c, request *r, size_t need,
+                                    const char *what, size_t bytes)
+{
+    char detail[240], a[32], b[32], m[32];
+    budget_format(need, a, sizeof a);
+    budget_format(bytes, b, sizeof b);
+    budget_format(srv.cfg.max_memory, m, sizeof m);
+    snprintf(detail, sizeof detail,
+             "the request needs about %s of memory, more than %s (%s) of this server's memory "
+             "budget (--max-memory %s) ever allows: send a smaller one",
+             a, what, b, m);
+    r->close = r->close || !r->body; /* an unread body is not read */
+    return respond_problem(c, r, MHD_HTTP_CONTENT_TOO_LARGE, detail, NULL, NULL);
+}
+
+enum MHD_Result respond_no_memory(struct MHD_Connection *c, request *r, const char *what,
+                                  size_t need)
+{
+    char detail[240], a[32], m[32];
+    budget_format(need, a, sizeof a);
+    budget_format(srv.cfg.max_memory, m, sizeof m);
+    snprintf(r->note, sizeof r->note, " (memory budget in use: %s refused)", a);
+    snprintf(detail, sizeof detail,
+             "%s needs %s of memory and the server's memory budget (--max-memory %s) is in use "
+             "by other requests now: retry after the given seconds",
+             what, a, m);
+    return respond_busy(c, r, detail, pool_retry_after(srv.slots));
 }

@@ -13,16 +13,22 @@
  *
  * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and stores
  * the request as a job in the job store (jobstore.h: SQLite in --state-dir, or PostgreSQL
- * with --jobs-db, shared by several daemons; either way jobs survive a restart); 202, with the job's id and its Location, only once the job is committed. Worker
- * threads run the stored requests (jobs.h: --job-workers threads, a queue of --job-queue, 503
- * with Retry-After when full, or with the problem job-store when the store fails).
- * GET /v1/simulations/ID polls it (status, progress, then result or problem; a done job's
- * result as CSV when Accept asks for text/csv), DELETE cancels it (200 once it has ended, 202
- * while it is still stopping). /problems/TYPE are the pages the problem types point at.
+ * with --jobs-db, shared by several daemons; either way jobs survive a restart); 202, with the
+ * job's id and its Location, only once the job is committed. Worker threads run the stored requests
+ * (jobs.h: --job-workers threads, a queue of --job-queue, 503 with Retry-After when full, or with
+ * the problem job-store when the store fails). GET /v1/simulations/ID polls it (status, progress,
+ * then result or problem; a done job's result as CSV when Accept asks for text/csv), DELETE cancels
+ * it (200 once it has ended, 202 while it is still stopping). /problems/TYPE are the pages the
+ * problem types point at.
+ *
+ * A simulation whose working memory (its n x n grid on --job-threads threads, memest.h, and its
+ * result) could never fit the memory budget is refused at submission with 413, whichever store
+ * keeps the jobs; a worker reserves it before running the job, waiting while it does not fit.
  */
 #include "daemon.h"
 #include "jobstatus.h"
 #include "ljgap.h"
+#include "ljgap_sim.h"
 #include "problems.h"
 
 #include <cjson/cJSON.h>
@@ -31,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <time.h>
 
 /* The OpenAPI document, server/openapi.json embedded by the Makefile ($(BUILD)/gen/openapi.c). */
 extern const char ljgapd_openapi[];
@@ -41,16 +48,21 @@ static enum MHD_Result route_healthz(struct MHD_Connection *c, request *r)
 {
     pool_stats ps;
     conns_stats cs;
-    char body[200];
+    budget_stats ms, bs;
+    char body[400];
     int n;
 
     pool_get_stats(srv.slots, &ps);
     conns_get_stats(srv.conns, &cs);
+    budget_get(srv.mem, &ms);
+    budget_get(srv.bodies, &bs);
     n = snprintf(body, sizeof body,
                  "{\"status\":\"pass\",\"compute\":{\"slots\":%u,\"running\":%u,\"waiting\":%u,"
-                 "\"queue\":%u},\"connections\":{\"open\":%u,\"limit\":%u}}",
-                 srv.cfg.slots, ps.running, ps.waiting, srv.cfg.queue, cs.open,
-                 srv.cfg.connections);
+                 "\"queue\":%u},\"connections\":{\"open\":%u,\"limit\":%u},"
+                 "\"memory\":{\"limit\":%zu,\"used\":%zu,\"peak\":%zu,\"bodies\":%zu,"
+                 "\"bodies_limit\":%zu,\"cache\":%zu}}",
+                 srv.cfg.slots, ps.running, ps.waiting, srv.cfg.queue, cs.open, srv.cfg.connections,
+                 ms.limit, ms.used, ms.peak, bs.used, bs.limit, srv.pinned);
     return respond_json(c, r, MHD_HTTP_OK, "application/health+json", body, (size_t)n);
 }
 
@@ -87,15 +99,32 @@ static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
 
 #define SIM_KIND "simulation" /* the job kind of a simulation in the store */
 
-/* A stored simulation request, parsed again (so a restarted daemon can run it) and run. */
+/* A simulation's working memory and its result (memest.h; the result: a few hundred bytes for
+ * each of at most LJGAP_SIM_GAPS_MAX gaps). */
+static size_t sim_memory(const char *body, size_t len)
+{
+    return ljgap_memest_sim_request(body, len, srv.cfg.job_threads) + len +
+           (size_t)LJGAP_SIM_GAPS_MAX * 1024;
+}
+
+/* A stored simulation request, parsed again (so a restarted daemon can run it) and run, once
+ * its memory is reserved in the budget (the worker waits for it, polling, while the job may
+ * be cancelled; submission refused jobs that could never fit). */
 static void sim_job_run(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
                         ljgap_reply *out)
 {
     ljgap_sim_control sc = {(double)srv.cfg.job_seconds, ctl->cancel, ctl->progress, ctl->ctx};
-    ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, out);
-    if (!sr) return; /* the problem is in *out */
-    ljgap_sim_request_run(sr, &sc, out);
+    const struct timespec tick = {0, 50 * 1000 * 1000};
+    size_t need = sim_memory(body, len), held = 0;
+    ljgap_sim_request *sr;
+
+    if (need <= compute_memory_max())
+        while (!(held = budget_try(srv.mem, need) ? need : 0) && !(ctl->cancel && *ctl->cancel))
+            nanosleep(&tick, NULL);
+    sr = ljgap_sim_request_parse(body, len, out);
+    if (sr) ljgap_sim_request_run(sr, &sc, out); /* else the problem is in *out */
     ljgap_sim_request_free(sr);
+    budget_release(srv.mem, held);
 }
 
 const ljgap_job_kind ljgapd_job_kinds[] = {{SIM_KIND, sim_job_run, NULL}};
@@ -144,6 +173,22 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
 
     if (!sr) return;            /* out->rep holds the problem */
     ljgap_sim_request_free(sr); /* valid: the job is its body, parsed again when it runs */
+    /* refused now, not when a worker takes it: its working memory (and its result, a few
+     * hundred bytes a gap) must fit the budget, whichever store keeps it */
+    size_t need = sim_memory(body, r->len), most = compute_memory_max();
+    if (need > most) {
+        char a[32], b[32], m[32];
+        budget_format(need, a, sizeof a);
+        budget_format(most, b, sizeof b);
+        budget_format(srv.cfg.max_memory, m, sizeof m);
+        out->problem = MHD_HTTP_CONTENT_TOO_LARGE;
+        snprintf(out->detail, sizeof out->detail,
+                 "the simulation needs about %s of memory (its n x n grid on %u thread%s), more "
+                 "than the %s a job may hold of this server's memory budget (--max-memory %s): "
+                 "use a smaller n",
+                 a, srv.cfg.job_threads, srv.cfg.job_threads == 1 ? "" : "s", b, m);
+        return;
+    }
     switch (ljgap_jobs_submit(srv.jobs, SIM_KIND, body, r->len, id)) {
     case LJGAP_JOBS_OK:
         break;

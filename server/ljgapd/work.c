@@ -18,6 +18,13 @@
  *
  * Responses are only ever queued from the I/O thread, inside the access handler; the pool's
  * threads only call MHD_resume_connection, which libmicrohttpd allows from any thread.
+ *
+ * Memory. Before a computation is submitted its working memory is estimated from the request
+ * (memest.h: from the body's length, or a text matrix's count of values); the pool reserves it
+ * in the budget when the task gets a slot and gives it back when the work returns, so a task
+ * that does not fit waits as for a slot (503 after --queue-wait, saying memory was the reason).
+ * One that could never fit, more than the budget leaves beside the cache and a full share of
+ * bodies (compute_memory_max), is 413 at once. Cached answers need none.
  */
 #include "daemon.h"
 
@@ -74,7 +81,7 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     work_task *w = r->task;
     work_reply *o = &w->out;
     enum MHD_Result ret = MHD_YES;
-    char detail[160];
+    char detail[240];
 
     if (w->t.waited_s >= 0.05 && w->t.outcome != POOL_GONE)
         snprintf(r->note, sizeof r->note, " waited=%.2fs", w->t.waited_s);
@@ -90,6 +97,18 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
                                    o->rep.len, o->header, o->value);
         break;
     case POOL_EXPIRED:
+        if (w->t.starved) {
+            char m[32];
+            snprintf(r->note, sizeof r->note, " waited=%.2fs for memory", w->t.waited_s);
+            budget_format(srv.cfg.max_memory, m, sizeof m);
+            snprintf(detail, sizeof detail,
+                     "waited %.0f s (the --queue-wait limit) for a compute slot and the memory "
+                     "of its computation: the memory budget (--max-memory %s) was in use; "
+                     "retry after the given seconds",
+                     w->t.waited_s, m);
+            ret = respond_busy(c, r, detail, pool_retry_after(p));
+            break;
+        }
         snprintf(detail, sizeof detail,
                  "waited %.0f s for a free compute slot (the --queue-wait limit); every slot "
                  "was busy: retry after the given seconds",
@@ -134,6 +153,7 @@ enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, wor
     snprintf(w->t.client, sizeof w->t.client, "%s", r->client);
     ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
     w->t.fd = ci ? ci->connect_fd : -1;
+    w->t.mem = p == srv.slots ? r->mem : 0; /* reserved when it gets a slot */
     r->task = w;
     switch (pool_submit(p, &w->t)) {
     case POOL_OK:
@@ -150,6 +170,25 @@ enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, wor
         return respond_busy(c, r, "the server is shutting down; retry after the given seconds",
                             srv.cfg.retry_after);
     }
+}
+
+/* ---- memory (budget.h, memest.h) ---- */
+
+size_t compute_memory_max(void)
+{
+    size_t lim = budget_limit(srv.mem), rest = lim - srv.pinned - budget_limit(srv.bodies);
+    return srv.pinned + budget_limit(srv.bodies) < lim ? rest : 0;
+}
+
+/* Sets r->mem to the computation's estimate; answers 413 (returns 1, *ret set) when it could
+ * never fit (its body is in the bodies' share, already reserved). */
+static int over_budget(struct MHD_Connection *c, request *r, size_t est, enum MHD_Result *ret)
+{
+    size_t most = compute_memory_max();
+    r->mem = est;
+    if (est <= most) return 0;
+    *ret = respond_over_budget(c, r, est, "the part one computation may hold", most);
+    return 1;
 }
 
 /* ---- POST /v1/NAME: the cache, then a compute slot ---- */
@@ -208,6 +247,12 @@ enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
         free(key);
         return ret;
     }
+    if (over_budget(c, r,
+                    ljgap_memest_json(r->len, ljgap_json_values(r->body, r->len), srv.cfg.slots),
+                    &ret)) {
+        free(key);
+        return ret;
+    }
     return route_offload(c, r, srv.slots, compute_work, key, klen);
 }
 
@@ -227,7 +272,13 @@ static void psd_text_work(request *r, const volatile int *cancel, work_reply *ou
 enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
 {
     if (!r->text) return route_compute(c, r);
-    if (!r->task)
+    enum MHD_Result ret;
+    if (!r->task) {
+        size_t values = r->tokens.tokens, cap = LJGAP_TOPO_POINTS_DEFAULT;
         r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+        /* the parser stops after its cap of heights */
+        if (over_budget(c, r, ljgap_memest_psd_text(values < cap ? values + 1 : cap + 1), &ret))
+            return ret;
+    }
     return route_offload(c, r, srv.slots, psd_text_work, NULL, 0);
 }

@@ -8,7 +8,8 @@
 //
 // Environment (tests/contract/run.sh): URL, PID and ERR of a daemon started with
 // --job-workers 1 --job-queue 1 --client-connections 64 (it is stopped by SIGTERM at the end, for
-// the 503 of shutdown), WEB_URL of one serving an empty --web directory (the page's 404), ROOT.
+// the 503 of shutdown), WEB_URL of one serving an empty --web directory (the page's 404), MEM_URL
+// of one started with --max-memory 64M (the 413 and 503 of the memory budget), ROOT.
 import { readFileSync, readdirSync } from "node:fs";
 import { setTimeout as sleep } from "node:timers/promises";
 import SwaggerParser from "@apidevtools/swagger-parser";
@@ -16,7 +17,7 @@ import { fromSchema } from "@openapi-contrib/openapi-schema-to-json-schema";
 import * as C from "./contract.mjs";
 import { apiExamples, docExamples, fetchExample } from "./examples.mjs";
 
-const { URL: BASE, PID, ERR, WEB_URL, ROOT = "." } = process.env;
+const { URL: BASE, PID, ERR, WEB_URL, MEM_URL, ROOT = "." } = process.env;
 const text = readFileSync(`${ROOT}/server/openapi.json`, "utf8");
 let failed = 0;
 const report = (ok, what) => {
@@ -163,6 +164,28 @@ async function computations() {
   const body = compute["/v1/adhesion"][0][1];
   const again = check("the same request again (from the cache)", "POST", "/v1/adhesion", await post("/v1/adhesion", body), { status: 200 });
   report(again.json?.meta?.cached === true, "the second identical request is answered from the cache (meta.cached true)");
+}
+
+// ---- 2b. the memory budget (a daemon with --max-memory 64M: bodies may hold ~30 MB) ----
+
+async function memory() {
+  const big = ("7 ".repeat(49) + "7\n").repeat(400000); // 40 MB of heights
+  const TEXT = { "Content-Type": "text/plain" };
+  const chunked = check("40 MB chunked, crossing the memory budget", "POST", "/v1/psd?dx=1",
+    await call("POST", "/v1/psd?dx=1", { base: MEM_URL, headers: TEXT, body: big, chunked: true }), { status: 503, type: "/problems/busy" });
+  report(/--max-memory 64 MiB/.test(chunked.json?.detail || ""), "the 503 of the memory budget names --max-memory");
+  // refused from the headers, before the body: the client waits for 100 Continue, so the
+  // answer is not lost in a reset while the body is still being written
+  const early = (ct, n) => ({ "Content-Type": ct, "Content-Length": String(n), Expect: "100-continue" });
+  const sized = check("40 MB with Content-Length, more than the bodies' share", "POST", "/v1/psd?dx=1",
+    await call("POST", "/v1/psd?dx=1", { base: MEM_URL, headers: early("text/plain", big.length) }), { status: 413, type: "/problems/content-too-large" });
+  report(/--max-memory 64 MiB/.test(sized.json?.detail || ""), "the 413 of the memory budget names --max-memory");
+  const grid = check("a simulation whose 512² grid does not fit the budget", "POST", "/v1/simulations",
+    await call("POST", "/v1/simulations", { base: MEM_URL, headers: JSON_CT, body: JSON.stringify({ psd: { kind: "power", D: 2.2, k1: 1, k2: 8, m0: 0.1 }, n: 512, realizations: 2, g_ave: [2] }) }), { status: 413 });
+  report(/grid/.test(grid.json?.detail || ""), "the simulation's 413 names its grid");
+  const octet = await call("POST", "/v1/psd", { headers: early("application/octet-stream", 2 << 20) });
+  check("Content-Type: application/octet-stream", "POST", "/v1/psd", octet, { status: 415, type: "/problems/unsupported-media-type" });
+  report(octet.headers?.["accept-post"] === "application/json, text/plain, text/csv", `/v1/psd's 415 lists the types it takes in Accept-Post (${octet.headers?.["accept-post"]})`);
 }
 
 // ---- 3. the service routes and the page ----
@@ -318,6 +341,7 @@ async function shutdown(longJob) {
 
 await examples();
 await computations();
+await memory();
 await service();
 const longJob = await simulations();
 await shutdown(longJob);

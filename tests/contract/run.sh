@@ -24,18 +24,25 @@ if ! start web --web "$tmp/emptyweb"; then
 fi
 WEB_URL=$URL
 WEB_PID=$PID
+if ! start mem --max-memory 64M; then
+    echo "not ok - ljgapd --max-memory 64M did not start: $(head -c 300 "$tmp/mem.err")"
+    exit 1
+fi
+MEM_URL=$URL
+MEM_PID=$PID
 # one job worker and one waiting job: the third is refused (503); 64 connections for the
 # shutdown's prepared connections
 if ! start main --compute-slots 2 --job-workers 1 --job-queue 1 --client-connections 64; then
     echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/main.err")"
     exit 1
 fi
-URL=$URL PID=$PID ERR=$tmp/main.err WEB_URL=$WEB_URL ROOT=$PWD timeout 120 node tests/contract/run.mjs
+URL=$URL PID=$PID ERR=$tmp/main.err WEB_URL=$WEB_URL MEM_URL=$MEM_URL ROOT=$PWD timeout 120 \
+    node tests/contract/run.mjs
 rc=$?
 # run.mjs stopped the main daemon with SIGTERM: it exits 0 within its 10 s
 for _ in $(seq 1 200); do kill -0 "$PID" 2>/dev/null || break; sleep 0.05; done
 wait "$PID"
 check "ljgapd exits 0 after the SIGTERM of the shutdown checks" [ $? = 0 ]
-kill -TERM "$WEB_PID"
-wait "$WEB_PID"
+kill -TERM "$WEB_PID" "$MEM_PID"
+wait "$WEB_PID" "$MEM_PID"
 [ "$rc" = 0 ] || [ "$rc" = 1 ] || echo "not ok - node tests/contract/run.mjs exited with status $rc"

@@ -36,6 +36,15 @@
  * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
  * with an empty name, or 1 with a numeric address that fits the buffer, for buffers of any size.
  *
+ * The pseudo-endpoint "@max-memory" feeds the body (up to its first NUL) to budget_parse_size,
+ * the daemon's reading of --max-memory SIZE: it must refuse (-1) or give exactly the digits times
+ * the suffix's power of 1024, nonzero and at most 2^50 bytes.
+ *
+ * The pseudo-endpoint "@heights" checks the count of a text height matrix's values that the
+ * daemon makes as the body arrives (memest.h, its memory estimate): counted in two pieces split
+ * anywhere it is the count of the whole, and it bounds the heights the parser reads
+ * (ljgap_topo_text_parse), so the estimate made from it bounds the computation's memory.
+ *
  * The pseudo-endpoint "@jobrow" fuzzes what the daemon reads back from its job store (a
  * database row is input too). The body's first seven lines are a job record's id, state,
  * progress, created, started, finished and now (numbers through strtod, so inf, nan and hex
@@ -56,8 +65,11 @@
  * The same file is linked into build/.../fuzz/replay (tests/fuzz/replay.c) with the normal
  * compiler: there a breach is counted (ljgap_fuzz_failures) instead of aborting.
  */
+#include "budget.h"
 #include "forwarded.h"
 #include "handler.h"
+#include "memest.h"
+#include "request.h"
 #include "jobstatus.h"
 #include "jobstore.h"
 
@@ -333,6 +345,48 @@ static void fuzz_forwarded(const char *body, size_t len)
     free(xff);
 }
 
+/* "@max-memory": budget_parse_size refuses or reads exactly DIGITS[KMG][B]. */
+static void fuzz_max_memory(const char *body, size_t len)
+{
+    ljgap_reply none = {0};
+    char *s = strndup(body, len), *end = NULL;
+    size_t v = 0;
+    unsigned long long digits;
+    unsigned shift = 0;
+    if (!s) return;
+    if (budget_parse_size(s, &v) == 0) {
+        digits = strtoull(s, &end, 10);
+        if (*end && strchr("kK", *end)) shift = 10;
+        if (*end && strchr("mM", *end)) shift = 20;
+        if (*end && strchr("gG", *end)) shift = 30;
+        if (v == 0 || v > (size_t)1 << 50 || v != (size_t)(digits << shift))
+            breach("@max-memory", &none, "\"%.40s\" read as %zu", s, v);
+    }
+    free(s);
+}
+
+/* "@heights": the count of values, whole or in two pieces, bounds the heights parsed. */
+static void fuzz_heights(const char *body, size_t len)
+{
+    ljgap_reply none = {0};
+    ljgap_token_count whole = {0}, parts = {0};
+    ljgap_topo_spec t = {0};
+    ljgap_verr ve = {0};
+    size_t cut = len ? (unsigned char)body[0] % (len + 1) : 0;
+    ljgap_token_feed(&whole, body, len);
+    ljgap_token_feed(&parts, body, cut);
+    ljgap_token_feed(&parts, body + cut, len - cut);
+    if (parts.tokens != whole.tokens)
+        breach("@heights", &none, "%zu values in pieces, %zu whole", parts.tokens, whole.tokens);
+    if (!(ve.errors = cJSON_CreateArray())) return;
+    ljgap_topo_text_parse(body, len, 4096, &t, &ve);
+    if (t.h && t.nx * t.ny > whole.tokens)
+        breach("@heights", &none, "%zu x %zu heights read, %zu values counted", t.nx, t.ny,
+               whole.tokens);
+    free(t.h);
+    cJSON_Delete(ve.errors);
+}
+
 /* The next line of [*p, end) as a NUL-terminated copy in buf (cut at size - 1); 0 at the end. */
 static int next_line(const char **p, const char *end, char *buf, size_t size)
 {
@@ -535,6 +589,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (len) memcpy(body, nl + 1, len);
     if (strcmp(ep, "@x-forwarded-for") == 0) {
         fuzz_forwarded(body, len);
+        goto end;
+    }
+    if (strcmp(ep, "@max-memory") == 0) {
+        fuzz_max_memory(body, len);
+        goto end;
+    }
+    if (strcmp(ep, "@heights") == 0) {
+        fuzz_heights(body, len);
         goto end;
     }
     if (strcmp(ep, "@jobrow") == 0) {

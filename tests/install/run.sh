@@ -143,6 +143,17 @@ else
     check "ljgapd.service: this ljgapd has no --state-dir (the job store's), so the unit passes none" \
         eval '! grep -q "^ExecStart=.*--state-dir" "$unit"'
 fi
+# the unit's memory bound and the daemon's budget agree: MemoryMax above --max-memory, by at
+# most 512 MiB (what the budget does not count: the program, threads, connection buffers)
+mib() { # mib SIZE: a --max-memory or MemoryMax= size (K, M, G suffixes) in MiB
+    awk -v s="$1" 'BEGIN { n = s + 0; u = toupper(substr(s, length(s)));
+        print (u == "G" ? n * 1024 : u == "M" ? n : u == "K" ? n / 1024 : n / 1048576) }'
+}
+budget=$(sed -n 's/^ExecStart=.* --max-memory \([0-9]*[KMG]\).*/\1/p' "$unit")
+memmax=$(sed -n 's/^MemoryMax=//p' "$unit")
+check "ljgapd.service: MemoryMax=$memmax a little above its --max-memory $budget" \
+    eval '[ -n "$budget" ] && [ -n "$memmax" ] &&
+          awk -v b="$(mib "$budget")" -v m="$(mib "$memmax")" "BEGIN { exit !(m > b && m <= b + 512) }"'
 m=""
 for f in $(sed -n 's/^ExecStart=//p' "$unit" | grep -o -- '--[a-z][a-z-]*'); do
     "$dest$prefix/sbin/ljgapd" --help | grep -q -- "$f" || m="$m $f"

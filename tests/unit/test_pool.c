@@ -85,7 +85,7 @@ static void init_task(test_task *x, int index, const char *client, int fd)
 
 static pool *start(unsigned slots, unsigned cap, double wait)
 {
-    pool_config c = {slots, cap, wait};
+    pool_config c = {slots, cap, wait, NULL};
     pool *p = pool_start(&c);
     assert_non_null(p);
     atomic_store(&n_started, 0);
@@ -336,9 +336,70 @@ static void test_stop_grace(void **state)
     pool_free(p);
 }
 
+/* With a memory budget: a task runs only once its bytes are reserved. Two slots, a budget of
+ * 100 bytes: a (60) runs, b (60) waits although a slot is free, c (30) runs beside a; when a
+ * ends its bytes go back and b runs. A task whose bytes are held elsewhere (a body) starts
+ * within a poll once they are released; one that never fits expires, marked starved. */
+static void test_memory(void **state)
+{
+    budget *b = budget_new(100, NULL);
+    pool_config c = {2, 8, 10, b};
+    pool *p = pool_start(&c);
+    test_task t[3];
+    budget_stats st;
+    assert_non_null(p);
+    atomic_store(&n_started, 0);
+    for (int i = 0; i < 3; i++) {
+        init_task(&t[i], i, "a", -1);
+        t[i].t.mem = i < 2 ? 60 : 30;
+    }
+    assert_int_equal(pool_submit(p, &t[0].t), POOL_OK);
+    WAIT_FOR(atomic_load(&n_started) == 1);
+    assert_int_equal(pool_submit(p, &t[1].t), POOL_OK);
+    sleep_ms(3 * POOL_POLL_MS);
+    assert_int_equal(atomic_load(&t[1].ran), 0); /* a slot is free, the memory is not */
+    assert_int_equal(pool_submit(p, &t[2].t), POOL_OK);
+    WAIT_FOR(atomic_load(&t[2].ran) == 1); /* 30 bytes fit beside a's 60 */
+    budget_get(b, &st);
+    assert_int_equal(st.used, 90);
+    finish(&t[2]);
+    finish(&t[0]);
+    WAIT_FOR(atomic_load(&t[1].ran) == 1);
+    assert_true(t[1].t.starved);
+    finish(&t[1]);
+    WAIT_FOR((budget_get(b, &st), st.used == 0));
+    assert_int_equal(st.peak, 90);
+    pool_free(p);
+
+    /* bytes held outside the pool: the waiting task starts once they are given back */
+    pool_config c2 = {1, 8, 0.5, b};
+    p = pool_start(&c2);
+    assert_non_null(p);
+    assert_true(budget_try(b, 80));
+    init_task(&t[0], 0, "a", -1);
+    t[0].t.mem = 50;
+    init_task(&t[1], 1, "b", -1);
+    t[1].t.mem = 101; /* never fits */
+    assert_int_equal(pool_submit(p, &t[0].t), POOL_OK);
+    assert_int_equal(pool_submit(p, &t[1].t), POOL_OK);
+    sleep_ms(3 * POOL_POLL_MS);
+    assert_int_equal(atomic_load(&t[0].ran), 0);
+    budget_release(b, 80);
+    WAIT_FOR(atomic_load(&t[0].ran) == 1);
+    finish(&t[0]);
+    WAIT_FOR(atomic_load(&t[1].woken) == 1);
+    assert_int_equal(t[1].t.outcome, POOL_EXPIRED);
+    assert_true(t[1].t.starved);
+    assert_int_equal(atomic_load(&t[1].ran), 0);
+    pool_free(p);
+    budget_get(b, &st);
+    assert_int_equal(st.used, 0);
+    budget_free(b);
+}
+
 static void test_bad_config(void **state)
 {
-    pool_config c0 = {0, 4, 10}, c1 = {1, 4, 0};
+    pool_config c0 = {0, 4, 10, NULL}, c1 = {1, 4, 0, NULL};
     assert_null(pool_start(&c0));
     assert_null(pool_start(&c1));
     assert_null(pool_start(NULL));
@@ -360,6 +421,7 @@ int main(void)
         cmocka_unit_test(test_data_is_not_hangup),
         cmocka_unit_test(test_stop),
         cmocka_unit_test(test_stop_grace),
+        cmocka_unit_test(test_memory),
         cmocka_unit_test(test_bad_config),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
