@@ -3,8 +3,12 @@
 #                   page compiled in) and the test and benchmark programs
 #   make run        install what building and serving need, build, serve on $(PORT) with the
 #                   jobs kept in $(BUILD)/state
-#   make test       install that and the test tools, build, run every test
-#                   (last line: tests: N passed, N failed)
+#   make check      the quick loop after an edit (under 2 minutes on 2 cores): build, then the
+#                   unit tests but the three long numerical ones, the HTTP, contract, CSV and
+#                   CLI suites (last line: tests: N passed, N failed)
+#   make test       install that and the test tools, build, run every test but the memcheck
+#                   suite, JOBS (default: the cores) at a time (last line as above);
+#                   MEMCHECK=1 adds it (.ci/run does, in the plain build)
 #   make bench      install that and the benchmark tools, run the benchmarks (bench/results/);
 #                   BENCH="speed errtime" runs only those
 #   make fuzz       install clang and its fuzzer runtime, fuzz (mk/fuzz.mk)
@@ -102,7 +106,7 @@ UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all programs test run deps bench clean format install uninstall
+.PHONY: all programs test check run deps bench clean format install uninstall
 all: $(PROGS) $(UNIT_BIN) $(BENCH_BIN) $(ALL_EXTRA)
 programs: $(PROGS)
 
@@ -223,10 +227,19 @@ deps: deps-all
 # The recursive make re-reads pkg-config after check-deps may have installed libraries. The
 # test preparations go first: one of them reinstalls web/node_modules, which the page is built
 # from.
+MEMCHECK ?= 0
 test: check-deps-test
 	@$(MAKE) --no-print-directory $(TEST_PREP)
 	@$(MAKE) --no-print-directory all
-	@BUILD=$(BUILD) tests/run.sh
+	@BUILD=$(BUILD) MEMCHECK=$(MEMCHECK) tests/run.sh
+
+# What an edit usually breaks, quickly: test_mc, test_cross and test_paper (the Monte Carlo and
+# the paper's figures, minutes between them) wait for make test.
+CHECK_SUITES := unit -test_mc -test_cross -test_paper http contract csv cli
+check: check-deps-test
+	@$(MAKE) --no-print-directory $(CONTRACT_NPM_STAMP)
+	@$(MAKE) --no-print-directory $(PROGS) $(UNIT_BIN)
+	@BUILD=$(BUILD) tests/run.sh $(CHECK_SUITES)
 
 run: check-deps-run
 	@$(MAKE) --no-print-directory $(PROGS) $(RUN_PREP)
