@@ -75,16 +75,16 @@ if cc -static "$ROOT/tests/install/fig4.c" $sflags -o fig4-static 2>"$tmp/cc.err
 else
     echo "not ok - static: fig4.c does not build with --static: $(head -c 400 "$tmp/cc.err")"
 fi
-# the README's example of the library, built the same way
+# the library's example in docs/serving.md, built the same way
 awk '/^\*\*The library\.\*\*/ { on = 1 } on && /^```c/ { c = 1; next } c && /^```/ { exit }
-     c { print }' "$ROOT/README.md" >readme.c
+     c { print }' "$ROOT/docs/serving.md" >readme.c
 # shellcheck disable=SC2086
 if [ -s readme.c ] && cc readme.c $flags -o readme-example 2>"$tmp/cc.err"; then
     out=$(LD_LIBRARY_PATH=$dest$prefix/lib ./readme-example)
-    check "the README's library example builds and prints $out" \
+    check "docs/serving.md's library example builds and prints $out" \
         eval '[[ "$out" =~ ^dgamma_eff\ =\ 0\.20149[89]\ ± ]]'
 else
-    echo "not ok - the README's library example does not build: $(head -c 400 "$tmp/cc.err")"
+    echo "not ok - docs/serving.md's library example does not build: $(head -c 400 "$tmp/cc.err")"
 fi
 cd "$ROOT"
 
