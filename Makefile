@@ -64,7 +64,9 @@ VERSION := $(shell sed -n 's/^\#define LJGAP_VERSION "\(.*\)"/\1/p' include/ljga
 SOMAJOR := $(firstword $(subst ., ,$(VERSION)))
 
 CORE_SRC := $(wildcard core/*.c)
-SERVER_SRC := $(filter-out server/cli.c,$(wildcard server/*.c))
+# server/: the request layer (api/: the handler, validation, answers, CSV, problems) and the job
+# store (jobs/), in one archive; the CLI (cli/) and the daemon (ljgapd/) link it.
+SERVER_SRC := $(wildcard server/*.c server/api/*.c server/jobs/*.c)
 # The daemon's own files (server/ljgapd/): all but main.c also go into an archive that the unit
 # tests link (the scheduler and the connection records are tested without HTTP).
 DAEMON_SRC := $(filter-out server/ljgapd/main.c,$(wildcard server/ljgapd/*.c))
@@ -96,7 +98,7 @@ CFLAGS ?= $(OPT) -g
 WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
         -Wno-unused-parameter
 ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore \
-              -Iserver/ljgapd \
+              -Iserver/api -Iserver/jobs -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
 LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm
 ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)
@@ -134,7 +136,7 @@ $(SHLIB): $(CORE_SRC:%.c=$(BUILD)/pic/%.o)
 	$(Q)$(CC) $(ALL_LDFLAGS) -shared -Wl,-soname,$(SONAME) $^ \
 	  $(EXTRA_LIBS) $(shell pkg-config --libs gsl fftw3 2>/dev/null) -lpthread -lm -o $@
 
-$(BUILD)/ljgap: $(BUILD)/server/cli.o $(LIBSERVER) $(LIBCORE)
+$(BUILD)/ljgap: $(BUILD)/server/cli/main.o $(LIBSERVER) $(LIBCORE)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -153,7 +155,7 @@ $(BUILD)/gen/openapi.c: server/openapi.json
 	  echo '    "";'; echo 'const size_t ljgapd_openapi_len = sizeof ljgapd_openapi - 1;'; } > $@
 
 # The page (web/: every file it loads, uPlot from npm included, and the icons) embedded in the
-# daemon as the table ljgapd_web_files (server/webfiles.h), written by tools/embed.c.
+# daemon as the table ljgapd_web_files (server/ljgapd/webfiles.h), written by tools/embed.c.
 WEB_EMBED := $(sort $(wildcard web/*.html web/*.js web/*.css web/*.svg web/*.ico web/*.png)) \
              $(WEB_VENDOR)
 $(BUILD)/gen/web.c: $(BUILD)/tools/embed $(WEB_EMBED)
@@ -161,7 +163,7 @@ $(BUILD)/gen/web.c: $(BUILD)/tools/embed $(WEB_EMBED)
 	@$(if $(Q),echo "  GEN     $@")
 	$(Q)$(BUILD)/tools/embed $@ web $(WEB_EMBED:web/%=%)
 
-$(BUILD)/tools/embed: $(BUILD)/tools/embed.o $(LIBSERVER)
+$(BUILD)/tools/embed: $(BUILD)/tools/embed.o $(LIBDAEMON) $(LIBSERVER)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ $(LDLIBS) -o $@
 
@@ -250,7 +252,7 @@ bench: check-deps-bench
 	@BUILD=$(BUILD) bench/run.sh $(BENCH)
 
 format:
-	clang-format -i include/*.h core/*.c server/*.c server/*.h server/ljgapd/*.[ch] \
+	clang-format -i include/*.h core/*.[ch] server/*.[ch] server/*/*.[ch] \
 	  tests/unit/*.c bench/*.c tools/*.c
 
 clean:

@@ -1,4 +1,4 @@
-/* jobstore.c -- how long the SQLite job store's calls take (server/jobstore_sqlite.c), on a
+/* jobstore.c -- how long the SQLite job store's calls take (server/jobs/jobstore_sqlite.c), on a
  * temporary directory under /tmp: the calls an HTTP thread makes (create = a committed,
  * fsync'ed insert; get of a finished job with a 20 kB result plus its status JSON, which is what
  * GET /v1/simulations/ID does; cancel of a queued job) and those a worker makes (claim, renew,

@@ -1,5 +1,5 @@
 # scaleout.mk -- several ljgapd behind nginx sharing one PostgreSQL job store (issue 17).
-#   building and serving: libpq (ljgapd --jobs-db postgresql://..., server/jobstore_pg.c)
+#   building and serving: libpq (ljgapd --jobs-db postgresql://..., server/jobs/jobstore_pg.c)
 #   make test: a private PostgreSQL cluster (initdb, pg_ctl, psql from Debian's postgresql) and
 #              nginx in front of two ljgapd (tests/scaleout/run.sh); make run installs neither
 #   make bench: nginx again (bench/scaleout.sh: /v1/adhesion through nginx, 1 and 2 ljgapd)

@@ -8,15 +8,9 @@
 #ifndef LJGAP_HANDLER_H
 #define LJGAP_HANDLER_H
 
-#include <stddef.h>
+#include "reply.h" /* ljgap_reply, ljgap_reply_free */
 
-typedef struct {
-    int status;               /* HTTP status code */
-    char *body;               /* malloc'd, NUL-terminated; free with ljgap_reply_free */
-    size_t len;               /* strlen(body) */
-    const char *content_type; /* "application/json", "application/problem+json", text/csv
-                               * (csv.h) or text/html (problems.h) */
-} ljgap_reply;
+#include <stddef.h>
 
 /* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
 typedef struct {
@@ -60,11 +54,6 @@ typedef struct {
 /* ljgap_handle with per-call settings (call may be NULL: the same as ljgap_handle). */
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out);
-void ljgap_reply_free(ljgap_reply *r);
-
-/* A problem answer of type /problems/SLUG (problems.h gives its status and title) with this
- * detail and an empty errors[]. */
-void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail);
 
 /* Is this endpoint name one the handler computes (so the HTTP layer can answer 404/405)? */
 int ljgap_handler_has(const char *endpoint);

@@ -9,10 +9,14 @@
  *   work.c    answering off the I/O thread: computations on compute slots (after the
  *             answer cache), job-store calls on the store's threads (pool.h)
  *   static.c  the page's files
- *   reply.c   the only code that creates responses (respond_json, respond_problem, ...)
- *   pool.c   compute slots, the fair wait queue, cancel on hang-up (MHD-free)
+ *   respond.c the only code that creates responses (ljgapd_respond_json, ..._problem, ...)
+ *   pool.c    compute slots, the fair wait queue, cancel on hang-up (MHD-free)
  *   conns.c   connection records: slow senders, per-client counts (MHD-free)
  *   budget.c  the memory budget (--max-memory): bytes reserved before use (MHD-free)
+ *   http_cache.c  the answer cache: a bounded LRU of computed answers (MHD-free)
+ *   forwarded.c   the client an X-Forwarded-For header names (--trust-proxy)
+ *   webfiles.c    the page's allowlist and the compiled-in table (tools/embed.c writes it)
+ * Externs shared between these files are prefixed ljgapd_.
  */
 #ifndef LJGAPD_DAEMON_H
 #define LJGAPD_DAEMON_H
@@ -88,7 +92,7 @@ typedef struct {
     atomic_ulong id_counter; /* made-up request ids are seed + counter */
 } ljgapd_server;
 
-extern ljgapd_server srv;
+extern ljgapd_server ljgapd_srv;
 
 /* ---- one request (http.c) ---- */
 
@@ -122,7 +126,7 @@ typedef struct {
     int too_large;                /* the body outgrew its limit: answer 413 */
     int no_memory;                /* the body outgrew the memory budget: answer 503 */
     int close;                    /* close the connection after the answer (body left unread) */
-    size_t held;                  /* bytes of the body reserved in srv.bodies */
+    size_t held;                  /* bytes of the body reserved in ljgapd_srv.bodies */
     ljgap_token_count tokens;     /* a text body's values so far (memest.h) */
     size_t mem;                   /* its computation's estimate, reserved when it gets a slot */
     size_t discarded;             /* body bytes dropped since (or after an early answer) */
@@ -158,13 +162,13 @@ extern const ljgap_job_kind ljgapd_job_kinds[];
 extern const size_t ljgapd_job_nkinds;
 
 /* The row for url: first match wins; the last row (path NULL) answers 404. */
-const struct route *route_find(const char *url);
+const struct route *ljgapd_route_find(const char *url);
 /* Is method one of the comma-separated tokens in allow? */
-int method_allowed(const char *allow, const char *method);
+int ljgapd_method_allowed(const char *allow, const char *method);
 /* Is the Content-Type application/json or application/...+json (parameters allowed)? */
-int is_json_type(const char *ct);
+int ljgapd_is_json_type(const char *ct);
 /* Is it text/plain or text/csv (parameters allowed)? */
-int is_text_type(const char *ct);
+int ljgapd_is_text_type(const char *ct);
 
 /* ---- work off the I/O thread (work.c) ---- */
 
@@ -184,63 +188,64 @@ typedef void (*work_fn)(request *r, const volatile int *cancel, work_reply *out)
 
 /* Suspends the connection and runs fn on p; answers when it is resumed (the route calls
  * this again on its second call: r->task is set then). Takes key (may be NULL). */
-enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, work_fn fn, char *key,
-                              size_t klen);
+enum MHD_Result ljgapd_route_offload(struct MHD_Connection *c, request *r, pool *p, work_fn fn,
+                                     char *key, size_t klen);
 /* Frees the request's task, if any (the request's end). */
-void work_release(request *r);
+void ljgapd_work_release(request *r);
 
 /* POST /v1/NAME: the cache, else a compute slot. */
-enum MHD_Result route_compute(struct MHD_Connection *c, request *r);
-int compute_exists(const char *rest);
-/* POST /v1/psd: JSON as route_compute; a text body (a height matrix) with its query on a
+enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r);
+int ljgapd_compute_exists(const char *rest);
+/* POST /v1/psd: JSON as ljgapd_route_compute; a text body (a height matrix) with its query on a
  * compute slot, not cached. */
-enum MHD_Result route_psd(struct MHD_Connection *c, request *r);
+enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r);
 
 /* static.c: GET / and the page's files: compiled in, or from --web DIR. */
-enum MHD_Result route_static(struct MHD_Connection *c, request *r);
-int static_exists(const char *rest);
+enum MHD_Result ljgapd_route_static(struct MHD_Connection *c, request *r);
+int ljgapd_static_exists(const char *rest);
 
-/* ---- replies (reply.c): the only code that creates responses ---- */
+/* ---- replies (respond.c): the only code that creates responses ---- */
 
 /* Answer status with a copy of body (ctype as given) and, if header is not NULL, one extra
  * header. */
-enum MHD_Result respond_json_hdr(struct MHD_Connection *c, request *r, int status,
-                                 const char *ctype, const char *body, size_t len,
-                                 const char *header, const char *value);
-enum MHD_Result respond_json(struct MHD_Connection *c, request *r, int status, const char *ctype,
-                             const char *body, size_t len);
+enum MHD_Result ljgapd_respond_json_hdr(struct MHD_Connection *c, request *r, int status,
+                                        const char *ctype, const char *body, size_t len,
+                                        const char *header, const char *value);
+enum MHD_Result ljgapd_respond_json(struct MHD_Connection *c, request *r, int status,
+                                    const char *ctype, const char *body, size_t len);
 /* Answers a ljgap_reply and frees it. */
-enum MHD_Result respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep);
+enum MHD_Result ljgapd_respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep);
 /* An RFC 9457 problem; header/value, if not NULL, is one extra header (Allow, Retry-After). */
-enum MHD_Result respond_problem(struct MHD_Connection *c, request *r, int status,
-                                const char *detail, const char *header, const char *value);
+enum MHD_Result ljgapd_respond_problem(struct MHD_Connection *c, request *r, int status,
+                                       const char *detail, const char *header, const char *value);
 /* 503 with Retry-After: seconds. */
-enum MHD_Result respond_busy(struct MHD_Connection *c, request *r, const char *detail,
-                             unsigned seconds);
+enum MHD_Result ljgapd_respond_busy(struct MHD_Connection *c, request *r, const char *detail,
+                                    unsigned seconds);
 /* 503 of type unavailable (the computation was cancelled: its client went away), with
  * Retry-After: 1. */
-enum MHD_Result respond_cancelled(struct MHD_Connection *c, request *r, const char *detail);
+enum MHD_Result ljgapd_respond_cancelled(struct MHD_Connection *c, request *r, const char *detail);
 /* 200 with the file open on fd (size bytes); fd is closed with the response. */
-enum MHD_Result respond_file(struct MHD_Connection *c, request *r, int fd, size_t size,
-                             const char *ctype);
+enum MHD_Result ljgapd_respond_file(struct MHD_Connection *c, request *r, int fd, size_t size,
+                                    const char *ctype);
 /* 200 with static bytes (not copied) and their ETag, or 304 when if_none_match matches it. */
-enum MHD_Result respond_static(struct MHD_Connection *c, request *r, const void *data, size_t len,
-                               const char *ctype, const char *etag, const char *if_none_match);
+enum MHD_Result ljgapd_respond_static(struct MHD_Connection *c, request *r, const void *data,
+                                      size_t len, const char *ctype, const char *etag,
+                                      const char *if_none_match);
 /* 413: the request body is over cfg.max_body. */
-enum MHD_Result respond_too_large(struct MHD_Connection *c, request *r);
+enum MHD_Result ljgapd_respond_too_large(struct MHD_Connection *c, request *r);
 /* 413 for memory: what the request needs (need bytes) can never fit the budget, whose part
  * (what bytes) is named in the detail. */
-enum MHD_Result respond_over_budget(struct MHD_Connection *c, request *r, size_t need,
-                                    const char *what, size_t bytes);
+enum MHD_Result ljgapd_respond_over_budget(struct MHD_Connection *c, request *r, size_t need,
+                                           const char *what, size_t bytes);
 /* 503 + Retry-After: the memory budget is in use now (what: "the request body", ...). */
-enum MHD_Result respond_no_memory(struct MHD_Connection *c, request *r, const char *what,
-                                  size_t need);
+enum MHD_Result ljgapd_respond_no_memory(struct MHD_Connection *c, request *r, const char *what,
+                                         size_t need);
 
 /* Bytes of the budget one computation or simulation may reserve at most: what is left beside
  * the pinned cache and a full share of bodies (its own body is in that share). */
-size_t compute_memory_max(void);
+size_t ljgapd_compute_memory_max(void);
 
 /* Seconds since t0 (CLOCK_MONOTONIC). */
-double seconds_since(const struct timespec *t0);
+double ljgapd_seconds_since(const struct timespec *t0);
 
 #endif

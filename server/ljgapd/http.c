@@ -65,7 +65,7 @@ static void client_of(struct MHD_Connection *c, char *out, size_t n)
 {
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
-    if (srv.cfg.trust_proxy) {
+    if (ljgapd_srv.cfg.trust_proxy) {
         const char *xff = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Forwarded-For");
         if (xff && ljgap_forwarded_client(xff, out, n)) return;
     }
@@ -81,7 +81,7 @@ static request *request_new(struct MHD_Connection *c, const char *url, const cha
 
     if (!r) return NULL;
     clock_gettime(CLOCK_MONOTONIC, &r->t0);
-    r->limit = srv.cfg.max_body; /* a text route raises it in request_begin */
+    r->limit = ljgapd_srv.cfg.max_body; /* a text route raises it in request_begin */
     r->conn = c;
     r->rec = ci ? ci->socket_context : NULL;
     r->url = url;
@@ -93,8 +93,8 @@ static request *request_new(struct MHD_Connection *c, const char *url, const cha
             strlen(rid))
         strcpy(r->id, rid);
     else
-        snprintf(r->id, sizeof r->id, "%08x%08lx", srv.id_seed,
-                 (unsigned long)atomic_fetch_add(&srv.id_counter, 1) + 1);
+        snprintf(r->id, sizeof r->id, "%08x%08lx", ljgapd_srv.id_seed,
+                 (unsigned long)atomic_fetch_add(&ljgapd_srv.id_counter, 1) + 1);
     return r;
 }
 
@@ -145,62 +145,63 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     unsigned long long want = 0;
     char detail[200];
 
-    if (srv.cfg.trust_proxy) {
-        if (!conns_client_enter(srv.conns, r->client, srv.cfg.client_connections)) {
+    if (ljgapd_srv.cfg.trust_proxy) {
+        if (!conns_client_enter(ljgapd_srv.conns, r->client, ljgapd_srv.cfg.client_connections)) {
             snprintf(detail, sizeof detail,
                      "this client already has %u requests in progress (--client-connections); "
                      "retry after the given seconds",
-                     srv.cfg.client_connections);
-            return respond_busy(c, r, detail, 1);
+                     ljgapd_srv.cfg.client_connections);
+            return ljgapd_respond_busy(c, r, detail, 1);
         }
         r->counted = 1;
     }
-    r->route = route_find(r->url);
+    r->route = ljgapd_route_find(r->url);
     if (!r->route->path) return r->route->answer(c, r);
-    if (!method_allowed(r->route->allow, method)) {
+    if (!ljgapd_method_allowed(r->route->allow, method)) {
         snprintf(detail, sizeof detail, "use %s", r->route->allow);
-        return respond_problem(c, r, MHD_HTTP_METHOD_NOT_ALLOWED, detail, MHD_HTTP_HEADER_ALLOW,
-                               r->route->allow);
+        return ljgapd_respond_problem(c, r, MHD_HTTP_METHOD_NOT_ALLOWED, detail,
+                                      MHD_HTTP_HEADER_ALLOW, r->route->allow);
     }
     if (!r->route->takes_body) return r->route->answer(c, r);
 
     ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-    r->text = r->route->text_max && is_text_type(ctype);
-    r->limit = r->text ? r->route->text_max : srv.cfg.max_body;
+    r->text = r->route->text_max && ljgapd_is_text_type(ctype);
+    r->limit = r->text ? r->route->text_max : ljgapd_srv.cfg.max_body;
     clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (clen) want = strtoull(clen, NULL, 10);
-    if (!r->text && !is_json_type(ctype)) {
+    if (!r->text && !ljgapd_is_json_type(ctype)) {
         /* the type first: a body the route never takes is 415 whatever its size */
         const char *types =
             r->route->text_max ? "application/json, text/plain, text/csv" : "application/json";
         r->close = want > 0; /* its body is not read */
         snprintf(detail, sizeof detail, "%s takes %s (Accept-Post), not %.40s", r->route->path,
                  types, ctype ? ctype : "a body without Content-Type");
-        return respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, detail, "Accept-Post", types);
+        return ljgapd_respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, detail, "Accept-Post",
+                                      types);
     }
     if (want > r->limit) {
         r->close = 1;
-        return respond_too_large(c, r);
+        return ljgapd_respond_too_large(c, r);
     }
     if (r->text && query_copy(c, r)) return MHD_NO;
     if (want) {
         /* reserved before a byte is read: a body that does not fit is refused unread */
         size_t need = (size_t)want + 1;
-        if (need > budget_limit(srv.bodies)) {
+        if (need > budget_limit(ljgapd_srv.bodies)) {
             r->close = 1;
-            return respond_over_budget(c, r, need, "the share of request bodies",
-                                       budget_limit(srv.bodies));
+            return ljgapd_respond_over_budget(c, r, need, "the share of request bodies",
+                                              budget_limit(ljgapd_srv.bodies));
         }
-        if (!budget_try(srv.bodies, need)) {
+        if (!budget_try(ljgapd_srv.bodies, need)) {
             r->close = 1;
-            return respond_no_memory(c, r, "the request body", need);
+            return ljgapd_respond_no_memory(c, r, "the request body", need);
         }
         r->held = need;
         r->body = malloc(need);
         if (!r->body) return MHD_NO;
         r->cap = need;
     }
-    conns_receiving(srv.conns, r->rec);
+    conns_receiving(ljgapd_srv.conns, r->rec);
     return MHD_YES;
 }
 
@@ -209,7 +210,7 @@ static void body_free(request *r)
 {
     free(r->body);
     r->body = NULL;
-    budget_release(srv.bodies, r->held);
+    budget_release(ljgapd_srv.bodies, r->held);
     r->held = 0;
     r->len = r->cap = 0;
 }
@@ -233,7 +234,7 @@ static int request_take(request *r, const char *data, size_t n)
         while (cap < r->len + n + 1)
             cap *= 2;
         if (cap > limit + 1) cap = limit + 1;
-        if (!budget_try(srv.bodies, cap - r->held)) {
+        if (!budget_try(ljgapd_srv.bodies, cap - r->held)) {
             r->no_memory = 1;
             r->discarded = r->len;
             body_free(r);
@@ -266,7 +267,7 @@ enum MHD_Result ljgapd_on_access(void *cls, struct MHD_Connection *c, const char
         r = request_new(c, url, method);
         if (!r) return MHD_NO;
         *con_cls = r;
-        atomic_fetch_add(&srv.inflight, 1);
+        atomic_fetch_add(&ljgapd_srv.inflight, 1);
         return request_begin(c, r, method);
     }
     r->url = url; /* the same string on every call; kept current to be safe */
@@ -276,12 +277,12 @@ enum MHD_Result ljgapd_on_access(void *cls, struct MHD_Connection *c, const char
         return request_take(r, upload_data, n) == 0 ? MHD_YES : MHD_NO;
     }
     if (r->status) return MHD_YES;
-    conns_busy(srv.conns, r->rec);
-    if (r->too_large) return respond_too_large(c, r);
+    conns_busy(ljgapd_srv.conns, r->rec);
+    if (r->too_large) return ljgapd_respond_too_large(c, r);
     if (r->no_memory) {
         r->close = 1;
-        return respond_no_memory(c, r, "the request body, sent without Content-Length,",
-                                 r->discarded + 1);
+        return ljgapd_respond_no_memory(c, r, "the request body, sent without Content-Length,",
+                                        r->discarded + 1);
     }
     return r->route->answer(c, r);
 }
@@ -294,17 +295,17 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     if (!r) return;
     /* behind a proxy the remote address is the proxy's: name the client it forwarded */
     fprintf(stderr, "%s %s %d %.1fms id=%s%s%s%s%s\n", r->method, r->path, r->status,
-            1e3 * seconds_since(&r->t0), r->id, srv.cfg.trust_proxy ? " client=" : "",
-            srv.cfg.trust_proxy ? r->client : "", r->note,
+            1e3 * ljgapd_seconds_since(&r->t0), r->id, ljgapd_srv.cfg.trust_proxy ? " client=" : "",
+            ljgapd_srv.cfg.trust_proxy ? r->client : "", r->note,
             toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "" : " (connection closed early)");
-    conns_idle(srv.conns, r->rec);
-    if (r->counted) conns_client_leave(srv.conns, r->client);
-    work_release(r);
+    conns_idle(ljgapd_srv.conns, r->rec);
+    if (r->counted) conns_client_leave(ljgapd_srv.conns, r->client);
+    ljgapd_work_release(r);
     free(r->params);
     body_free(r);
     free(r);
     *con_cls = NULL;
-    atomic_fetch_sub(&srv.inflight, 1);
+    atomic_fetch_sub(&ljgapd_srv.inflight, 1);
 }
 
 void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_context,
@@ -313,9 +314,9 @@ void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_con
     if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
         const union MHD_ConnectionInfo *ci =
             MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
-        *socket_context = ci ? conns_open(srv.conns, ci->connect_fd) : NULL;
+        *socket_context = ci ? conns_open(ljgapd_srv.conns, ci->connect_fd) : NULL;
     } else {
-        conns_close(srv.conns, *socket_context);
+        conns_close(ljgapd_srv.conns, *socket_context);
         *socket_context = NULL;
     }
 }
@@ -336,7 +337,7 @@ void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap)
     while (n > 0 && (msg[n - 1] == '\n' || msg[n - 1] == '\r'))
         msg[--n] = '\0';
     pthread_mutex_lock(&lock);
-    if (strcmp(msg, last) == 0 && seconds_since(&t_last) < 1.0) {
+    if (strcmp(msg, last) == 0 && ljgapd_seconds_since(&t_last) < 1.0) {
         repeats++;
     } else {
         if (repeats) fprintf(stderr, "ljgapd: libmicrohttpd: (%lu more like: %s)\n", repeats, last);

@@ -47,7 +47,7 @@
 #define OPS_QUEUE 256 /* job-store calls waiting at most */
 #define CACHE_ENTRY_OVERHEAD 256 /* bytes an answer cache entry holds besides key and answer */
 
-ljgapd_server srv = {.web_fd = -1};
+ljgapd_server ljgapd_srv = {.web_fd = -1};
 
 /* Raises the soft open-file limit to the hard one and fits the connection limit inside it.
  * Writes what it did into note. */
@@ -69,7 +69,7 @@ static void fit_file_limit(char *note, size_t n)
     fit = rl.rlim_cur > FD_RESERVE + 4
               ? (unsigned)(rl.rlim_cur - FD_RESERVE > 1000000 ? 1000000 : rl.rlim_cur - FD_RESERVE)
               : 4;
-    if (srv.cfg.connections > fit) srv.cfg.connections = fit;
+    if (ljgapd_srv.cfg.connections > fit) ljgapd_srv.cfg.connections = fit;
     if (rl.rlim_cur == was)
         snprintf(note, n, "open-file limit %llu", (unsigned long long)rl.rlim_cur);
     else
@@ -101,31 +101,32 @@ static int store_open(char *buf, size_t n)
 {
     char err[600];
     unsigned queued = 0, running = 0;
-    if (srv.cfg.jobs_db) {
+    if (ljgapd_srv.cfg.jobs_db) {
         /* a connection for each thread that uses the store: workers, keeper, ops, main */
-        if (ljgap_jobstore_open_pg(srv.cfg.jobs_db, srv.cfg.jobs.workers + OPS_THREADS + 2,
-                                   &srv.store, err, sizeof err) != LJGAP_JOBSTORE_OK) {
+        if (ljgap_jobstore_open_pg(ljgapd_srv.cfg.jobs_db,
+                                   ljgapd_srv.cfg.jobs.workers + OPS_THREADS + 2, &ljgapd_srv.store,
+                                   err, sizeof err) != LJGAP_JOBSTORE_OK) {
             fprintf(stderr, "ljgapd: %s\n", err);
             return -1;
         }
     } else {
-        if (!srv.cfg.state_dir && !(srv.cfg.state_dir = default_state_dir(buf, n))) {
+        if (!ljgapd_srv.cfg.state_dir && !(ljgapd_srv.cfg.state_dir = default_state_dir(buf, n))) {
             fprintf(stderr, "ljgapd: no state directory: give --state-dir DIR (neither "
                             "$STATE_DIRECTORY, $XDG_STATE_HOME nor $HOME is set)\n");
             return -1;
         }
-        if (ljgap_jobstore_open_sqlite(srv.cfg.state_dir, &srv.store, err, sizeof err) !=
-            LJGAP_JOBSTORE_OK) {
+        if (ljgap_jobstore_open_sqlite(ljgapd_srv.cfg.state_dir, &ljgapd_srv.store, err,
+                                       sizeof err) != LJGAP_JOBSTORE_OK) {
             fprintf(stderr, "ljgapd: cannot use the state directory: %s\n", err);
             return -1;
         }
     }
-    ljgap_jobstore_counts(srv.store, &queued, &running);
-    if (srv.cfg.jobs_db)
+    ljgap_jobstore_counts(ljgapd_srv.store, &queued, &running);
+    if (ljgapd_srv.cfg.jobs_db)
         fprintf(stderr, "ljgapd: jobs kept in %s, shared (%u queued, %u running), lease %g s\n",
-                srv.store->where, queued, running, srv.cfg.jobs.lease_seconds);
+                ljgapd_srv.store->where, queued, running, ljgapd_srv.cfg.jobs.lease_seconds);
     else
-        fprintf(stderr, "ljgapd: jobs kept in %s (%u queued)\n", srv.store->where, queued);
+        fprintf(stderr, "ljgapd: jobs kept in %s (%u queued)\n", ljgapd_srv.store->where, queued);
     return 0;
 }
 
@@ -138,51 +139,52 @@ static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
         MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ITC | MHD_USE_ERROR_LOG;
     /* Without --trust-proxy the remote address is the client, and libmicrohttpd refuses its
      * connections past the limit at accept; behind a proxy every connection is the proxy's. */
-    unsigned per_ip = srv.cfg.trust_proxy ? 0 : srv.cfg.client_connections;
+    unsigned per_ip = ljgapd_srv.cfg.trust_proxy ? 0 : ljgapd_srv.cfg.client_connections;
     struct MHD_Daemon *d;
     const union MHD_DaemonInfo *info;
 
-    if (inet_pton(AF_INET, srv.cfg.bind, &in4.sin_addr) == 1) {
+    if (inet_pton(AF_INET, ljgapd_srv.cfg.bind, &in4.sin_addr) == 1) {
         in4.sin_family = AF_INET;
-        in4.sin_port = htons((uint16_t)srv.cfg.port);
+        in4.sin_port = htons((uint16_t)ljgapd_srv.cfg.port);
         sa = (struct sockaddr *)&in4;
         snprintf(host, hostsz, "%s",
-                 in4.sin_addr.s_addr == htonl(INADDR_ANY) ? "127.0.0.1" : srv.cfg.bind);
-    } else if (inet_pton(AF_INET6, srv.cfg.bind, &in6.sin6_addr) == 1) {
+                 in4.sin_addr.s_addr == htonl(INADDR_ANY) ? "127.0.0.1" : ljgapd_srv.cfg.bind);
+    } else if (inet_pton(AF_INET6, ljgapd_srv.cfg.bind, &in6.sin6_addr) == 1) {
         in6.sin6_family = AF_INET6;
-        in6.sin6_port = htons((uint16_t)srv.cfg.port);
+        in6.sin6_port = htons((uint16_t)ljgapd_srv.cfg.port);
         sa = (struct sockaddr *)&in6;
         flags |= MHD_USE_IPv6;
         if (IN6_IS_ADDR_UNSPECIFIED(&in6.sin6_addr))
             snprintf(host, hostsz, "[::1]");
         else
-            snprintf(host, hostsz, "[%s]", srv.cfg.bind);
+            snprintf(host, hostsz, "[%s]", ljgapd_srv.cfg.bind);
     } else {
         fprintf(stderr, "ljgapd: --bind wants a numeric IPv4 or IPv6 address, not '%s'\n",
-                srv.cfg.bind);
+                ljgapd_srv.cfg.bind);
         return NULL;
     }
     struct MHD_OptionItem opts[] = {
         {MHD_OPTION_EXTERNAL_LOGGER, (intptr_t)ljgapd_mhd_log, NULL}, /* first, as MHD asks */
         {MHD_OPTION_SOCK_ADDR, 0, sa},
-        {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)srv.cfg.connections, NULL},
+        {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)ljgapd_srv.cfg.connections, NULL},
         {MHD_OPTION_PER_IP_CONNECTION_LIMIT, (intptr_t)per_ip, NULL},
-        {MHD_OPTION_CONNECTION_TIMEOUT, (intptr_t)srv.cfg.idle_s, NULL},
+        {MHD_OPTION_CONNECTION_TIMEOUT, (intptr_t)ljgapd_srv.cfg.idle_s, NULL},
         {MHD_OPTION_NOTIFY_COMPLETED, (intptr_t)ljgapd_on_completed, NULL},
         {MHD_OPTION_NOTIFY_CONNECTION, (intptr_t)ljgapd_on_connection, NULL},
         /* last, so that one I/O thread (no pool) simply ends the list here */
-        {srv.cfg.io_threads > 1 ? MHD_OPTION_THREAD_POOL_SIZE : MHD_OPTION_END,
-         (intptr_t)srv.cfg.io_threads, NULL},
+        {ljgapd_srv.cfg.io_threads > 1 ? MHD_OPTION_THREAD_POOL_SIZE : MHD_OPTION_END,
+         (intptr_t)ljgapd_srv.cfg.io_threads, NULL},
         {MHD_OPTION_END, 0, NULL},
     };
-    d = MHD_start_daemon(flags, (uint16_t)srv.cfg.port, NULL, NULL, ljgapd_on_access, NULL,
+    d = MHD_start_daemon(flags, (uint16_t)ljgapd_srv.cfg.port, NULL, NULL, ljgapd_on_access, NULL,
                          MHD_OPTION_ARRAY, opts, MHD_OPTION_END);
     if (!d) {
-        fprintf(stderr, "ljgapd: cannot listen on %s port %u\n", srv.cfg.bind, srv.cfg.port);
+        fprintf(stderr, "ljgapd: cannot listen on %s port %u\n", ljgapd_srv.cfg.bind,
+                ljgapd_srv.cfg.port);
         return NULL;
     }
     info = MHD_get_daemon_info(d, MHD_DAEMON_INFO_BIND_PORT);
-    if (info) srv.cfg.port = info->port;
+    if (info) ljgapd_srv.cfg.port = info->port;
     return d;
 }
 
@@ -190,7 +192,7 @@ static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
 static void wait_inflight(const struct timespec *t0, double until)
 {
     const struct timespec tick = {0, 20 * 1000 * 1000};
-    while (atomic_load(&srv.inflight) > 0 && seconds_since(t0) < until)
+    while (atomic_load(&ljgapd_srv.inflight) > 0 && ljgapd_seconds_since(t0) < until)
         nanosleep(&tick, NULL);
 }
 
@@ -202,7 +204,7 @@ int main(int argc, char **argv)
     char host[INET6_ADDRSTRLEN + 3], files[96], state_dir[4096], mem[32];
     struct timespec t_sig;
     MHD_socket lfd;
-    ljgapd_config *cfg = &srv.cfg;
+    ljgapd_config *cfg = &ljgapd_srv.cfg;
     pool_config slots_cfg, ops_cfg;
     int sig = 0, rc;
 
@@ -223,8 +225,8 @@ int main(int argc, char **argv)
     limits.max_seconds = cfg->max_seconds;
     limits.sim_threads = cfg->job_threads;
     ljgap_handler_set_limits(&limits);
-    if (getrandom(&srv.id_seed, sizeof srv.id_seed, 0) != sizeof srv.id_seed)
-        srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
+    if (getrandom(&ljgapd_srv.id_seed, sizeof ljgapd_srv.id_seed, 0) != sizeof ljgapd_srv.id_seed)
+        ljgapd_srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
     fit_file_limit(files, sizeof files);
 
     /* The memory budget: the answer cache's bound (at most a sixteenth) is held for good;
@@ -232,29 +234,30 @@ int main(int argc, char **argv)
      * estimates as they start, each at most the other half, so that one always fits beside a
      * full share of bodies (nothing can wait for memory that only waiting requests hold). */
     if (cfg->cache_bytes > cfg->max_memory / 16) cfg->cache_bytes = cfg->max_memory / 16;
-    srv.pinned = cfg->cache_bytes + cfg->cache_entries * CACHE_ENTRY_OVERHEAD;
-    if (srv.pinned > cfg->max_memory / 8) srv.pinned = cfg->max_memory / 8;
-    srv.mem = budget_new(cfg->max_memory, NULL);
-    srv.bodies = budget_new((cfg->max_memory - srv.pinned) / 2, srv.mem);
-    if (srv.mem) budget_try(srv.mem, srv.pinned);
+    ljgapd_srv.pinned = cfg->cache_bytes + cfg->cache_entries * CACHE_ENTRY_OVERHEAD;
+    if (ljgapd_srv.pinned > cfg->max_memory / 8) ljgapd_srv.pinned = cfg->max_memory / 8;
+    ljgapd_srv.mem = budget_new(cfg->max_memory, NULL);
+    ljgapd_srv.bodies = budget_new((cfg->max_memory - ljgapd_srv.pinned) / 2, ljgapd_srv.mem);
+    if (ljgapd_srv.mem) budget_try(ljgapd_srv.mem, ljgapd_srv.pinned);
     /* Large blocks (bodies, heights, FFT arrays) are mapped and unmapped, never kept by malloc
      * after they are freed: what the budget gives back is given back to the system. */
     mallopt(M_MMAP_THRESHOLD, 256 * 1024);
-    slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait, srv.mem};
+    slots_cfg = (pool_config){cfg->slots, cfg->queue, cfg->queue_wait, ljgapd_srv.mem};
     ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait, NULL};
-    srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
-    srv.jobs = ljgap_jobs_alloc(&cfg->jobs, srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
-    srv.slots = pool_start(&slots_cfg);
-    srv.ops = pool_start(&ops_cfg);
-    srv.conns = conns_start(cfg->receive_s);
-    if (!srv.mem || !srv.bodies || !srv.cache || !srv.jobs || !srv.slots || !srv.ops ||
-        !srv.conns) {
+    ljgapd_srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
+    ljgapd_srv.jobs =
+        ljgap_jobs_alloc(&cfg->jobs, ljgapd_srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
+    ljgapd_srv.slots = pool_start(&slots_cfg);
+    ljgapd_srv.ops = pool_start(&ops_cfg);
+    ljgapd_srv.conns = conns_start(cfg->receive_s);
+    if (!ljgapd_srv.mem || !ljgapd_srv.bodies || !ljgapd_srv.cache || !ljgapd_srv.jobs ||
+        !ljgapd_srv.slots || !ljgapd_srv.ops || !ljgapd_srv.conns) {
         fprintf(stderr, "ljgapd: out of memory or threads\n");
         goto end;
     }
     if (cfg->web) {
-        srv.web_fd = open(cfg->web, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-        if (srv.web_fd < 0) {
+        ljgapd_srv.web_fd = open(cfg->web, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (ljgapd_srv.web_fd < 0) {
             fprintf(stderr, "ljgapd: cannot open --web %s: %s\n", cfg->web, strerror(errno));
             goto end;
         }
@@ -276,40 +279,41 @@ int main(int argc, char **argv)
     while (sigwait(&sigs, &sig) != 0)
         ;
     clock_gettime(CLOCK_MONOTONIC, &t_sig);
-    atomic_store(&srv.stopping, 1);
+    atomic_store(&ljgapd_srv.stopping, 1);
     fprintf(stderr, "ljgapd: %s, stopping (%u requests in flight)\n", strsignal(sig),
-            atomic_load(&srv.inflight));
+            atomic_load(&ljgapd_srv.inflight));
     lfd = MHD_quiesce_daemon(d);
-    ljgap_jobs_shutdown(srv.jobs); /* no client waits for jobs: stop them now (they run again) */
+    ljgap_jobs_shutdown(
+        ljgapd_srv.jobs); /* no client waits for jobs: stop them now (they run again) */
     /* Waiting requests get 503 now; computations may finish for grace_s, then are cancelled.
      * Every suspended connection must be resumed before MHD_stop_daemon. */
-    if (!pool_stop(srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
-        !pool_stop(srv.ops, 0, cfg->stop_s - seconds_since(&t_sig))) {
+    if (!pool_stop(ljgapd_srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
+        !pool_stop(ljgapd_srv.ops, 0, cfg->stop_s - ljgapd_seconds_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a computation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
     wait_inflight(&t_sig, cfg->stop_s);
-    if (atomic_load(&srv.inflight) > 0)
+    if (atomic_load(&ljgapd_srv.inflight) > 0)
         fprintf(stderr, "ljgapd: %u requests did not finish; closing their connections\n",
-                atomic_load(&srv.inflight));
-    if (!ljgap_jobs_wait_idle(srv.jobs, cfg->stop_s - seconds_since(&t_sig))) {
+                atomic_load(&ljgapd_srv.inflight));
+    if (!ljgap_jobs_wait_idle(ljgapd_srv.jobs, cfg->stop_s - ljgapd_seconds_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a simulation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
     MHD_stop_daemon(d);
     if (lfd != MHD_INVALID_SOCKET) close(lfd);
-    fprintf(stderr, "ljgapd: stopped after %.1f s\n", seconds_since(&t_sig));
+    fprintf(stderr, "ljgapd: stopped after %.1f s\n", ljgapd_seconds_since(&t_sig));
     rc = 0;
 end:
-    if (srv.web_fd >= 0) close(srv.web_fd);
-    pool_free(srv.slots);
-    pool_free(srv.ops);
-    conns_free(srv.conns);
-    ljgap_jobs_free(srv.jobs);
-    ljgap_jobstore_close(srv.store);
+    if (ljgapd_srv.web_fd >= 0) close(ljgapd_srv.web_fd);
+    pool_free(ljgapd_srv.slots);
+    pool_free(ljgapd_srv.ops);
+    conns_free(ljgapd_srv.conns);
+    ljgap_jobs_free(ljgapd_srv.jobs);
+    ljgap_jobstore_close(ljgapd_srv.store);
     fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
-    http_cache_free(srv.cache);
-    budget_free(srv.bodies);
-    budget_free(srv.mem);
+    http_cache_free(ljgapd_srv.cache);
+    budget_free(ljgapd_srv.bodies);
+    budget_free(ljgapd_srv.mem);
     return rc;
 }

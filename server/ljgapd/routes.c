@@ -5,7 +5,7 @@
  * allows (anything else is 405 with Allow), whether it reads a JSON body, and the function
  * that answers. /healthz, /version and /openapi.json answer on the I/O thread at once: they
  * never wait for anything. The simulation job routes call the job store, which may wait (a
- * lock, a disk, a DELETE waiting for a job to stop), so they run on srv.ops (work.c).
+ * lock, a disk, a DELETE waiting for a job to stop), so they run on ljgapd_srv.ops (work.c).
  *
  * A row may take a text body besides JSON (text_max > 0): POST /v1/psd takes a height matrix as
  * text/plain or text/csv of up to LJGAP_TEXT_MAX_BYTES with its query (ljgap_handle_text);
@@ -52,18 +52,19 @@ static enum MHD_Result route_healthz(struct MHD_Connection *c, request *r)
     char body[400];
     int n;
 
-    pool_get_stats(srv.slots, &ps);
-    conns_get_stats(srv.conns, &cs);
-    budget_get(srv.mem, &ms);
-    budget_get(srv.bodies, &bs);
+    pool_get_stats(ljgapd_srv.slots, &ps);
+    conns_get_stats(ljgapd_srv.conns, &cs);
+    budget_get(ljgapd_srv.mem, &ms);
+    budget_get(ljgapd_srv.bodies, &bs);
     n = snprintf(body, sizeof body,
                  "{\"status\":\"pass\",\"compute\":{\"slots\":%u,\"running\":%u,\"waiting\":%u,"
                  "\"queue\":%u},\"connections\":{\"open\":%u,\"limit\":%u},"
                  "\"memory\":{\"limit\":%zu,\"used\":%zu,\"peak\":%zu,\"bodies\":%zu,"
                  "\"bodies_limit\":%zu,\"cache\":%zu}}",
-                 srv.cfg.slots, ps.running, ps.waiting, srv.cfg.queue, cs.open, srv.cfg.connections,
-                 ms.limit, ms.used, ms.peak, bs.used, bs.limit, srv.pinned);
-    return respond_json(c, r, MHD_HTTP_OK, "application/health+json", body, (size_t)n);
+                 ljgapd_srv.cfg.slots, ps.running, ps.waiting, ljgapd_srv.cfg.queue, cs.open,
+                 ljgapd_srv.cfg.connections, ms.limit, ms.used, ms.peak, bs.used, bs.limit,
+                 ljgapd_srv.pinned);
+    return ljgapd_respond_json(c, r, MHD_HTTP_OK, "application/health+json", body, (size_t)n);
 }
 
 static enum MHD_Result route_version(struct MHD_Connection *c, request *r)
@@ -82,18 +83,20 @@ static enum MHD_Result route_version(struct MHD_Connection *c, request *r)
         text = cJSON_PrintUnformatted(v);
     cJSON_Delete(v);
     if (!text)
-        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
-    ret = respond_json(c, r, MHD_HTTP_OK, "application/json", text, strlen(text));
+        return ljgapd_respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL,
+                                      NULL);
+    ret = ljgapd_respond_json(c, r, MHD_HTTP_OK, "application/json", text, strlen(text));
     cJSON_free(text);
     return ret;
 }
 
 static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
 {
-    return respond_json(c, r, MHD_HTTP_OK, "application/json", ljgapd_openapi, ljgapd_openapi_len);
+    return ljgapd_respond_json(c, r, MHD_HTTP_OK, "application/json", ljgapd_openapi,
+                               ljgapd_openapi_len);
 }
 
-/* ---- simulation jobs (on srv.ops) ---- */
+/* ---- simulation jobs (on ljgapd_srv.ops) ---- */
 
 #define SIM_PATH "/v1/simulations"
 
@@ -103,7 +106,7 @@ static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
  * each of at most LJGAP_SIM_GAPS_MAX gaps). */
 static size_t sim_memory(const char *body, size_t len)
 {
-    return ljgap_memest_sim_request(body, len, srv.cfg.job_threads) + len +
+    return ljgap_memest_sim_request(body, len, ljgapd_srv.cfg.job_threads) + len +
            (size_t)LJGAP_SIM_GAPS_MAX * 1024;
 }
 
@@ -113,18 +116,20 @@ static size_t sim_memory(const char *body, size_t len)
 static void sim_job_run(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
                         ljgap_reply *out)
 {
-    ljgap_sim_control sc = {(double)srv.cfg.job_seconds, ctl->cancel, ctl->progress, ctl->ctx};
+    ljgap_sim_control sc = {(double)ljgapd_srv.cfg.job_seconds, ctl->cancel, ctl->progress,
+                            ctl->ctx};
     const struct timespec tick = {0, 50 * 1000 * 1000};
     size_t need = sim_memory(body, len), held = 0;
     ljgap_sim_request *sr;
 
-    if (need <= compute_memory_max())
-        while (!(held = budget_try(srv.mem, need) ? need : 0) && !(ctl->cancel && *ctl->cancel))
+    if (need <= ljgapd_compute_memory_max())
+        while (!(held = budget_try(ljgapd_srv.mem, need) ? need : 0) &&
+               !(ctl->cancel && *ctl->cancel))
             nanosleep(&tick, NULL);
     sr = ljgap_sim_request_parse(body, len, out);
     if (sr) ljgap_sim_request_run(sr, &sc, out); /* else the problem is in *out */
     ljgap_sim_request_free(sr);
-    budget_release(srv.mem, held);
+    budget_release(ljgapd_srv.mem, held);
 }
 
 const ljgap_job_kind ljgapd_job_kinds[] = {{SIM_KIND, sim_job_run, NULL}};
@@ -161,7 +166,7 @@ static void work_store_failed(work_reply *out)
     out->rep.len = strlen(p);
     out->rep.content_type = "application/problem+json";
     out->header = MHD_HTTP_HEADER_RETRY_AFTER;
-    snprintf(out->value, sizeof out->value, "%u", srv.cfg.job_retry);
+    snprintf(out->value, sizeof out->value, "%u", ljgapd_srv.cfg.job_retry);
 }
 
 /* POST /v1/simulations: validate, store, 202 with the job's status and its Location. */
@@ -175,37 +180,37 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
     ljgap_sim_request_free(sr); /* valid: the job is its body, parsed again when it runs */
     /* refused now, not when a worker takes it: its working memory (and its result, a few
      * hundred bytes a gap) must fit the budget, whichever store keeps it */
-    size_t need = sim_memory(body, r->len), most = compute_memory_max();
+    size_t need = sim_memory(body, r->len), most = ljgapd_compute_memory_max();
     if (need > most) {
         char a[32], b[32], m[32];
         budget_format(need, a, sizeof a);
         budget_format(most, b, sizeof b);
-        budget_format(srv.cfg.max_memory, m, sizeof m);
+        budget_format(ljgapd_srv.cfg.max_memory, m, sizeof m);
         out->problem = MHD_HTTP_CONTENT_TOO_LARGE;
         snprintf(out->detail, sizeof out->detail,
                  "the simulation needs about %s of memory (its n x n grid on %u thread%s), more "
                  "than the %s a job may hold of this server's memory budget (--max-memory %s): "
                  "use a smaller n",
-                 a, srv.cfg.job_threads, srv.cfg.job_threads == 1 ? "" : "s", b, m);
+                 a, ljgapd_srv.cfg.job_threads, ljgapd_srv.cfg.job_threads == 1 ? "" : "s", b, m);
         return;
     }
-    switch (ljgap_jobs_submit(srv.jobs, SIM_KIND, body, r->len, id)) {
+    switch (ljgap_jobs_submit(ljgapd_srv.jobs, SIM_KIND, body, r->len, id)) {
     case LJGAP_JOBS_OK:
         break;
     case LJGAP_JOBS_FULL:
         out->problem = MHD_HTTP_SERVICE_UNAVAILABLE;
         snprintf(out->detail, sizeof out->detail,
                  "the simulation queue is full (%u jobs waiting); retry after the given seconds",
-                 srv.cfg.jobs.queue_cap);
+                 ljgapd_srv.cfg.jobs.queue_cap);
         out->header = MHD_HTTP_HEADER_RETRY_AFTER;
-        snprintf(out->value, sizeof out->value, "%u", srv.cfg.job_retry);
+        snprintf(out->value, sizeof out->value, "%u", ljgapd_srv.cfg.job_retry);
         return;
     case LJGAP_JOBS_STOPPING:
         out->problem = MHD_HTTP_SERVICE_UNAVAILABLE;
         snprintf(out->detail, sizeof out->detail,
                  "the server is shutting down and takes no new jobs");
         out->header = MHD_HTTP_HEADER_RETRY_AFTER;
-        snprintf(out->value, sizeof out->value, "%u", srv.cfg.retry_after);
+        snprintf(out->value, sizeof out->value, "%u", ljgapd_srv.cfg.retry_after);
         return;
     case LJGAP_JOBS_STORE:
         work_store_failed(out);
@@ -215,7 +220,7 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
         return;
     }
     /* a job just stored is not evicted (only finished ones are) */
-    switch (ljgap_jobs_status(srv.jobs, id, &status)) {
+    switch (ljgap_jobs_status(ljgapd_srv.jobs, id, &status)) {
     case LJGAP_JOBS_OK:
         break;
     case LJGAP_JOBS_NOMEM:
@@ -232,7 +237,7 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
 
 static enum MHD_Result route_sim_submit(struct MHD_Connection *c, request *r)
 {
-    return route_offload(c, r, srv.ops, sim_submit_work, NULL, 0);
+    return ljgapd_route_offload(c, r, ljgapd_srv.ops, sim_submit_work, NULL, 0);
 }
 
 /* Any one path segment may name a job; unknown ones are answered 404. */
@@ -249,15 +254,15 @@ static void sim_job_work(request *r, const volatile int *cancel, work_reply *out
     int final = 1, st;
 
     if (strcmp(r->method, "DELETE") == 0)
-        st = ljgap_jobs_cancel(srv.jobs, id, srv.cfg.cancel_wait_s, &status, &final);
+        st = ljgap_jobs_cancel(ljgapd_srv.jobs, id, ljgapd_srv.cfg.cancel_wait_s, &status, &final);
     else
-        st = ljgap_jobs_status(srv.jobs, id, &status);
+        st = ljgap_jobs_status(ljgapd_srv.jobs, id, &status);
     if (st == LJGAP_JOBS_UNKNOWN) {
         out->problem = MHD_HTTP_NOT_FOUND;
         snprintf(out->detail, sizeof out->detail,
                  "no simulation job with this id: it never existed, or it finished more than "
                  "%.0f s ago or before the last %u finished jobs",
-                 srv.cfg.jobs.keep_seconds, srv.cfg.jobs.keep_done);
+                 ljgapd_srv.cfg.jobs.keep_seconds, ljgapd_srv.cfg.jobs.keep_done);
         return;
     }
     if (st == LJGAP_JOBS_STORE) {
@@ -281,7 +286,7 @@ static enum MHD_Result route_sim_job(struct MHD_Connection *c, request *r)
 {
     if (!r->task)
         r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
-    return route_offload(c, r, srv.ops, sim_job_work, NULL, 0);
+    return ljgapd_route_offload(c, r, ljgapd_srv.ops, sim_job_work, NULL, 0);
 }
 
 /* GET /problems/TYPE: what a problem type means and how to fix the request; /problems/: all. */
@@ -294,13 +299,13 @@ static enum MHD_Result route_problems(struct MHD_Connection *c, request *r)
 {
     ljgap_reply rep;
     ljgap_problem_page(r->url + strlen(LJGAP_PROBLEM_BASE), &rep);
-    return respond_reply(c, r, &rep);
+    return ljgapd_respond_reply(c, r, &rep);
 }
 
 static enum MHD_Result route_not_found(struct MHD_Connection *c, request *r)
 {
-    return respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such endpoint; see /openapi.json", NULL,
-                           NULL);
+    return ljgapd_respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such endpoint; see /openapi.json",
+                                  NULL, NULL);
 }
 
 /* First match wins; the last row matches everything. */
@@ -310,14 +315,14 @@ static const struct route routes[] = {
     {"/openapi.json", NULL, "GET, HEAD", 0, route_openapi, 0},
     {SIM_PATH, NULL, "POST", 1, route_sim_submit, 0},
     {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job, 0},
-    {"/v1/psd", NULL, "POST", 1, route_psd, LJGAP_TEXT_MAX_BYTES},
-    {"/v1/", compute_exists, "POST", 1, route_compute, 0},
+    {"/v1/psd", NULL, "POST", 1, ljgapd_route_psd, LJGAP_TEXT_MAX_BYTES},
+    {"/v1/", ljgapd_compute_exists, "POST", 1, ljgapd_route_compute, 0},
     {LJGAP_PROBLEM_BASE, problems_exists, "GET, HEAD", 0, route_problems, 0},
-    {"/", static_exists, "GET, HEAD", 0, route_static, 0},
+    {"/", ljgapd_static_exists, "GET, HEAD", 0, ljgapd_route_static, 0},
     {NULL, NULL, NULL, 0, route_not_found, 0},
 };
 
-const struct route *route_find(const char *url)
+const struct route *ljgapd_route_find(const char *url)
 {
     const struct route *rt = routes;
     for (; rt->path; rt++) {
@@ -331,7 +336,7 @@ const struct route *route_find(const char *url)
     return rt;
 }
 
-int method_allowed(const char *allow, const char *method)
+int ljgapd_method_allowed(const char *allow, const char *method)
 {
     size_t n = strlen(method);
     for (const char *p = allow; *p;) {
@@ -343,7 +348,7 @@ int method_allowed(const char *allow, const char *method)
     return 0;
 }
 
-int is_text_type(const char *ct)
+int ljgapd_is_text_type(const char *ct)
 {
     size_t n;
     if (!ct) return 0;
@@ -353,7 +358,7 @@ int is_text_type(const char *ct)
            (n == 8 && strncasecmp(ct, "text/csv", 8) == 0);
 }
 
-int is_json_type(const char *ct)
+int ljgapd_is_json_type(const char *ct)
 {
     size_t n;
     if (!ct) return 0;

@@ -19,12 +19,12 @@ static const char *static_rel(const char *rest)
     return rest[0] ? rest : "index.html";
 }
 
-int static_exists(const char *rest)
+int ljgapd_static_exists(const char *rest)
 {
     return ljgap_web_type(static_rel(rest)) != NULL;
 }
 
-enum MHD_Result route_static(struct MHD_Connection *c, request *r)
+enum MHD_Result ljgapd_route_static(struct MHD_Connection *c, request *r)
 {
     const char *rel = static_rel(r->url + 1);
     const char *ctype = ljgap_web_type(rel);
@@ -32,18 +32,18 @@ enum MHD_Result route_static(struct MHD_Connection *c, request *r)
     struct stat st;
     int fd = -1;
 
-    if (srv.web_fd < 0) {
+    if (ljgapd_srv.web_fd < 0) {
         if (!(f = ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, r->url)))
-            return respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
-        return respond_static(
+            return ljgapd_respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
+        return ljgapd_respond_static(
             c, r, f->data, f->len, f->type, f->etag,
             MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_IF_NONE_MATCH));
     }
-    fd = openat(srv.web_fd, rel, O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
+    fd = openat(ljgapd_srv.web_fd, rel, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return ljgapd_respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         close(fd);
-        return respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
+        return ljgapd_respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
     }
-    return respond_file(c, r, fd, (size_t)st.st_size, ctype);
+    return ljgapd_respond_file(c, r, fd, (size_t)st.st_size, ctype);
 }

@@ -4,7 +4,7 @@
  * libmicrohttpd runs every connection on its I/O thread(s) with epoll, so an access handler
  * must never block. A route whose answer takes time hands a work function to a pool (pool.h):
  *
- *   1. route_offload() makes a task and submits it. The pool accepts it and, still under its
+ *   1. ljgapd_route_offload() makes a task and submits it. The pool accepts it and, still under its
  *      lock, parks it: MHD_suspend_connection(), so the connection holds no thread while it
  *      waits or runs. A full pool answers 503 with Retry-After at once.
  *   2. A pool thread runs the work function, which fills a work_reply (a body, or a problem to
@@ -24,7 +24,7 @@
  * in the budget when the task gets a slot and gives it back when the work returns, so a task
  * that does not fit waits as for a slot (503 after --queue-wait, saying memory was the reason).
  * One that could never fit, more than the budget leaves beside the cache and a full share of
- * bodies (compute_memory_max), is 413 at once. Cached answers need none.
+ * bodies (ljgapd_compute_memory_max), is 413 at once. Cached answers need none.
  */
 #include "daemon.h"
 
@@ -47,7 +47,7 @@ static void task_free(work_task *w)
     free(w);
 }
 
-void work_release(request *r)
+void ljgapd_work_release(request *r)
 {
     task_free(r->task);
     r->task = NULL;
@@ -88,51 +88,52 @@ static enum MHD_Result answer_ended(struct MHD_Connection *c, request *r, pool *
     switch (w->t.outcome) {
     case POOL_DONE:
         if (o->problem)
-            ret = respond_problem(c, r, o->problem, o->detail, o->header, o->value);
+            ret = ljgapd_respond_problem(c, r, o->problem, o->detail, o->header, o->value);
         else if (!o->rep.body)
-            ret =
-                respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+            ret = ljgapd_respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory",
+                                         NULL, NULL);
         else
-            ret = respond_json_hdr(c, r, o->rep.status, o->rep.content_type, o->rep.body,
-                                   o->rep.len, o->header, o->value);
+            ret = ljgapd_respond_json_hdr(c, r, o->rep.status, o->rep.content_type, o->rep.body,
+                                          o->rep.len, o->header, o->value);
         break;
     case POOL_EXPIRED:
         if (w->t.starved) {
             char m[32];
             snprintf(r->note, sizeof r->note, " waited=%.2fs for memory", w->t.waited_s);
-            budget_format(srv.cfg.max_memory, m, sizeof m);
+            budget_format(ljgapd_srv.cfg.max_memory, m, sizeof m);
             snprintf(detail, sizeof detail,
                      "waited %.0f s (the --queue-wait limit) for a compute slot and the memory "
                      "of its computation: the memory budget (--max-memory %s) was in use; "
                      "retry after the given seconds",
                      w->t.waited_s, m);
-            ret = respond_busy(c, r, detail, pool_retry_after(p));
+            ret = ljgapd_respond_busy(c, r, detail, pool_retry_after(p));
             break;
         }
         snprintf(detail, sizeof detail,
                  "waited %.0f s for a free compute slot (the --queue-wait limit); every slot "
                  "was busy: retry after the given seconds",
                  w->t.waited_s);
-        ret = respond_busy(c, r, detail, pool_retry_after(p));
+        ret = ljgapd_respond_busy(c, r, detail, pool_retry_after(p));
         break;
     case POOL_STOPPED:
-        ret = respond_busy(c, r, "the server is shutting down; retry after the given seconds",
-                           srv.cfg.retry_after);
+        ret =
+            ljgapd_respond_busy(c, r, "the server is shutting down; retry after the given seconds",
+                                ljgapd_srv.cfg.retry_after);
         break;
     case POOL_GONE:
         /* Nobody is likely to read this (the socket hung up), but a client that only shut down
          * its sending side still learns what happened; a write to a closed socket just fails. */
-        ret = respond_cancelled(c, r,
-                                "the connection was closed (or shut down for sending) while "
-                                "the request waited or ran, so it was cancelled");
+        ret = ljgapd_respond_cancelled(c, r,
+                                       "the connection was closed (or shut down for sending) while "
+                                       "the request waited or ran, so it was cancelled");
         break;
     }
-    work_release(r);
+    ljgapd_work_release(r);
     return ret;
 }
 
-enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, work_fn fn, char *key,
-                              size_t klen)
+enum MHD_Result ljgapd_route_offload(struct MHD_Connection *c, request *r, pool *p, work_fn fn,
+                                     char *key, size_t klen)
 {
     const union MHD_ConnectionInfo *ci;
     work_task *w;
@@ -141,7 +142,8 @@ enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, wor
     if (r->task) return answer_ended(c, r, p);
     if (!(w = calloc(1, sizeof *w))) {
         free(key);
-        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+        return ljgapd_respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL,
+                                      NULL);
     }
     w->r = r;
     w->fn = fn;
@@ -153,41 +155,43 @@ enum MHD_Result route_offload(struct MHD_Connection *c, request *r, pool *p, wor
     snprintf(w->t.client, sizeof w->t.client, "%s", r->client);
     ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
     w->t.fd = ci ? ci->connect_fd : -1;
-    w->t.mem = p == srv.slots ? r->mem : 0; /* reserved when it gets a slot */
+    w->t.mem = p == ljgapd_srv.slots ? r->mem : 0; /* reserved when it gets a slot */
     r->task = w;
     switch (pool_submit(p, &w->t)) {
     case POOL_OK:
         return MHD_YES; /* suspended; answered when resumed */
     case POOL_FULL:
-        work_release(r);
+        ljgapd_work_release(r);
         snprintf(detail, sizeof detail,
                  "every compute slot is busy and the wait queue is full (%u waiting at most); "
                  "retry after the given seconds",
                  pool_queue_cap(p));
-        return respond_busy(c, r, detail, pool_retry_after(p));
+        return ljgapd_respond_busy(c, r, detail, pool_retry_after(p));
     default:
-        work_release(r);
-        return respond_busy(c, r, "the server is shutting down; retry after the given seconds",
-                            srv.cfg.retry_after);
+        ljgapd_work_release(r);
+        return ljgapd_respond_busy(c, r,
+                                   "the server is shutting down; retry after the given seconds",
+                                   ljgapd_srv.cfg.retry_after);
     }
 }
 
 /* ---- memory (budget.h, memest.h) ---- */
 
-size_t compute_memory_max(void)
+size_t ljgapd_compute_memory_max(void)
 {
-    size_t lim = budget_limit(srv.mem), rest = lim - srv.pinned - budget_limit(srv.bodies);
-    return srv.pinned + budget_limit(srv.bodies) < lim ? rest : 0;
+    size_t lim = budget_limit(ljgapd_srv.mem),
+           rest = lim - ljgapd_srv.pinned - budget_limit(ljgapd_srv.bodies);
+    return ljgapd_srv.pinned + budget_limit(ljgapd_srv.bodies) < lim ? rest : 0;
 }
 
 /* Sets r->mem to the computation's estimate; answers 413 (returns 1, *ret set) when it could
  * never fit (its body is in the bodies' share, already reserved). */
 static int over_budget(struct MHD_Connection *c, request *r, size_t est, enum MHD_Result *ret)
 {
-    size_t most = compute_memory_max();
+    size_t most = ljgapd_compute_memory_max();
     r->mem = est;
     if (est <= most) return 0;
-    *ret = respond_over_budget(c, r, est, "the part one computation may hold", most);
+    *ret = ljgapd_respond_over_budget(c, r, est, "the part one computation may hold", most);
     return 1;
 }
 
@@ -208,7 +212,7 @@ static void cache_store(const char *key, size_t klen, const ljgap_reply *rep)
     if (strcmp(rep->content_type, "application/json") != 0 || rep->len < n ||
         memcmp(rep->body + rep->len - n, tail, n) != 0)
         return; /* CSV, or not an answer of the handler's shape: not cached */
-    http_cache_put2(srv.cache, key, klen, rep->status, rep->body, rep->len - n, yes,
+    http_cache_put2(ljgapd_srv.cache, key, klen, rep->status, rep->body, rep->len - n, yes,
                     sizeof yes - 1);
 }
 
@@ -222,7 +226,7 @@ static void compute_work(request *r, const volatile int *cancel, work_reply *out
         cache_store(out->key, out->klen, &out->rep);
 }
 
-enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
+enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r)
 {
     const char *endpoint = r->url + strlen("/v1/");
     size_t elen = strlen(endpoint), alen, klen;
@@ -231,32 +235,34 @@ enum MHD_Result route_compute(struct MHD_Connection *c, request *r)
     int status = 0;
     enum MHD_Result ret;
 
-    if (r->task) return route_offload(c, r, srv.slots, compute_work, NULL, 0);
+    if (r->task) return ljgapd_route_offload(c, r, ljgapd_srv.slots, compute_work, NULL, 0);
     /* the cache key: Accept, NUL, endpoint, NUL, body bytes (only JSON answers are stored) */
     r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
     alen = r->accept ? strlen(r->accept) : 0;
     klen = alen + 1 + elen + 1 + r->len;
     if (!(key = malloc(klen)))
-        return respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL, NULL);
+        return ljgapd_respond_problem(c, r, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory", NULL,
+                                      NULL);
     memcpy(key, r->accept ? r->accept : "", alen + 1);
     memcpy(key + alen + 1, endpoint, elen + 1);
     if (r->len) memcpy(key + alen + 1 + elen + 1, r->body, r->len);
-    if (http_cache_get(srv.cache, key, klen, &status, &hit, &hitlen) == 1) {
-        ret = respond_json(c, r, status, "application/json", hit, hitlen);
+    if (http_cache_get(ljgapd_srv.cache, key, klen, &status, &hit, &hitlen) == 1) {
+        ret = ljgapd_respond_json(c, r, status, "application/json", hit, hitlen);
         free(hit);
         free(key);
         return ret;
     }
-    if (over_budget(c, r,
-                    ljgap_memest_json(r->len, ljgap_json_values(r->body, r->len), srv.cfg.slots),
-                    &ret)) {
+    if (over_budget(
+            c, r,
+            ljgap_memest_json(r->len, ljgap_json_values(r->body, r->len), ljgapd_srv.cfg.slots),
+            &ret)) {
         free(key);
         return ret;
     }
-    return route_offload(c, r, srv.slots, compute_work, key, klen);
+    return ljgapd_route_offload(c, r, ljgapd_srv.slots, compute_work, key, klen);
 }
 
-int compute_exists(const char *rest)
+int ljgapd_compute_exists(const char *rest)
 {
     return ljgap_handler_has(rest);
 }
@@ -269,9 +275,9 @@ static void psd_text_work(request *r, const volatile int *cancel, work_reply *ou
                       &out->rep);
 }
 
-enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
+enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
 {
-    if (!r->text) return route_compute(c, r);
+    if (!r->text) return ljgapd_route_compute(c, r);
     enum MHD_Result ret;
     if (!r->task) {
         size_t values = r->tokens.tokens, cap = LJGAP_TOPO_POINTS_DEFAULT;
@@ -280,5 +286,5 @@ enum MHD_Result route_psd(struct MHD_Connection *c, request *r)
         if (over_budget(c, r, ljgap_memest_psd_text(values < cap ? values + 1 : cap + 1), &ret))
             return ret;
     }
-    return route_offload(c, r, srv.slots, psd_text_work, NULL, 0);
+    return ljgapd_route_offload(c, r, ljgapd_srv.slots, psd_text_work, NULL, 0);
 }

@@ -1,4 +1,4 @@
-/* test_jobstore_pg.c -- the PostgreSQL job store (server/jobstore_pg.c) against a private
+/* test_jobstore_pg.c -- the PostgreSQL job store (server/jobs/jobstore_pg.c) against a private
  * cluster: tests/scaleout/run.sh starts one and runs this with LJGAP_TEST_PG_URL set to a
  * database of it (without it this program fails: it is not one of make test's plain unit
  * tests). Each case starts from a database without the schema ljgapd, and drops it again.

@@ -1,4 +1,4 @@
-/* test_csv.c -- the CSV answers (server/csv.c) and content negotiation (server/accept.c).
+/* test_csv.c -- the CSV answers (server/api/csv.c) and content negotiation (server/api/accept.c).
  *
  * The CSV form must carry the JSON answer's numbers and nothing else: each answer is asked
  * for as JSON, then turned into CSV (ljgap_csv_reply, so the two share every byte of input),

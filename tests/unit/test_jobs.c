@@ -1,4 +1,4 @@
-/* test_jobs.c -- the daemon's job runner (server/jobs.c) on a real SQLite store in a temporary
+/* test_jobs.c -- the daemon's job runner (server/jobs/jobs.c) on a real SQLite store in a temporary
  * directory, with test doubles for the work: a kind that answers at once (its body is a
  * number), one that fails, and one that holds its worker until a gate opens or it is
  * cancelled. States, progress, the queue bound, cancel (queued, running here, and asked

@@ -1,4 +1,4 @@
-/* test_jobstore.c -- the SQLite job store (server/jobstore_sqlite.c) on temporary directories:
+/* test_jobstore.c -- the SQLite job store (server/jobs/jobstore_sqlite.c) on temporary directories:
  * the contract every backend keeps (jobstore_contract.h: the life of a job, FIFO order, the
  * queue cap, leases, eviction, damaged rows read back), and what is SQLite's own: what a
  * restart does to running jobs, and every way opening can fail (missing and uncreatable, not a

@@ -1,4 +1,4 @@
-/* test_memest.c -- the memory estimates (server/memest.c) bound what the computations really
+/* test_memest.c -- the memory estimates (server/api/memest.c) bound what the computations really
  * use. Each case runs in a child process: it maps large blocks as ljgapd does (mallopt), resets
  * its peak resident size (writing 5 to /proc/self/clear_refs), runs the computation and reads
  * VmHWM; the growth over VmRSS before the run must be at most the estimate, and the estimate

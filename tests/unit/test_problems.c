@@ -1,4 +1,4 @@
-/* test_problems.c -- the problem types (server/problems.c) against openapi.json, and their pages.
+/* test_problems.c -- the problem types (server/api/problems.c) against openapi.json, and their pages.
  *
  * Linked with the daemon's embedded copy of server/openapi.json: the set of types it lists
  * must be exactly the table's (/problems/SLUG), each page must render with its title and text,

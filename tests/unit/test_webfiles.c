@@ -1,4 +1,4 @@
-/* test_webfiles.c -- the page compiled into ljgapd (server/webfiles.c, tools/embed.c).
+/* test_webfiles.c -- the page compiled into ljgapd (server/ljgapd/webfiles.c, tools/embed.c).
  *
  * Linked with the daemon's table ($(BUILD)/gen/web.o): every file the page loads (each local
  * src= and href= of its index.html) is in it, and so are the icons; every entry holds exactly

@@ -9,7 +9,7 @@
 #ifndef LJGAP_PROBLEMS_H
 #define LJGAP_PROBLEMS_H
 
-#include "handler.h"
+#include "reply.h"
 
 #define LJGAP_PROBLEM_BASE "/problems/" /* every problem type starts with this */
 
@@ -30,5 +30,9 @@ const ljgap_problem_doc *ljgap_problem_at(size_t i);
  * of all types). Fills *out with 200 text/html, or 404 problem+json for an unknown slug, or
  * the out-of-memory problem (free with ljgap_reply_free). */
 void ljgap_problem_page(const char *rest, ljgap_reply *out);
+
+/* A problem answer of type /problems/SLUG (its status and title from the table above) with this
+ * detail and an empty errors[]. */
+void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail);
 
 #endif

@@ -20,7 +20,7 @@
 #ifndef LJGAP_CSV_H
 #define LJGAP_CSV_H
 
-#include "handler.h"
+#include "reply.h"
 
 #include <cjson/cJSON.h>
 

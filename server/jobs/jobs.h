@@ -6,8 +6,8 @@
  * write progress and the answer back; clients poll by id. Since a job is its stored body, a
  * daemon that restarts (or crashes) runs the jobs that were queued or running again from the
  * start, under the same ids, and keeps serving the finished ones until they expire; with a
- * shared store another daemon does, once the lost job's lease lapses. The runner knows nothing of physics or
- * HTTP: kinds are functions given at start.
+ * shared store another daemon does, once the lost job's lease lapses. The runner knows nothing of
+ * physics or HTTP: kinds are functions given at start.
  *
  *   ljgap_jobs *js = ljgap_jobs_alloc(&cfg, store, kinds, nkinds);   workers start here
  *   ljgap_jobs_submit(js, "simulation", body, len, id);   durable, or LJGAP_JOBS_FULL
@@ -32,7 +32,7 @@
 #ifndef LJGAP_JOBS_H
 #define LJGAP_JOBS_H
 
-#include "handler.h"
+#include "reply.h"
 #include "jobstore.h"
 
 #include <stddef.h>
