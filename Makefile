@@ -63,7 +63,8 @@ endif
 VERSION := $(shell sed -n 's/^\#define LJGAP_VERSION "\(.*\)"/\1/p' include/ljgap.h)
 SOMAJOR := $(firstword $(subst ., ,$(VERSION)))
 
-CORE_SRC := $(wildcard core/*.c)
+# core/: the numerical library; core/sim/ the discrete numerical model and the hybrid
+CORE_SRC := $(wildcard core/*.c core/sim/*.c)
 # server/: the request layer (api/: the handler, validation, answers, CSV, problems) and the job
 # store (jobs/), in one archive; the CLI (cli/) and the daemon (ljgapd/) link it.
 SERVER_SRC := $(wildcard server/*.c server/api/*.c server/jobs/*.c)
@@ -97,7 +98,7 @@ OPT ?= -O2
 CFLAGS ?= $(OPT) -g
 WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
         -Wno-unused-parameter
-ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore \
+ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Iserver -Icore -Icore/sim \
               -Iserver/api -Iserver/jobs -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
 LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm

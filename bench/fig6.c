@@ -1,4 +1,4 @@
-/* fig6.c -- the paper's Fig. 6: the discrete numerical model (core/sim.c) against the
+/* fig6.c -- the paper's Fig. 6: the discrete numerical model (core/sim/sim.c) against the
  * statistical theory (ljgap_traction, PDE method) for D = 2.2, k1 = 1, k2 = 8 and
  * m0 = 0.1, 0.218, 0.3, four realizations (theory.md §5).
  *

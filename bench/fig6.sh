@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The paper's Fig. 6: discrete numerical model (core/sim.c) vs statistical theory (PDE) for
+# The paper's Fig. 6: discrete numerical model (core/sim/sim.c) vs statistical theory (PDE) for
 # D = 2.2, k1 = 1, k2 = 8, m0 = 0.1, 0.218, 0.3, four realizations. Writes
 #   bench/results/fig6.csv              per L, m0 and mean gap: numerical sigma (mean, std,
 #                                       error), theory (value, error), difference, residual, jump

@@ -1,5 +1,5 @@
 /* theory_map.c -- where the statistical theory holds: the adhesion summary (g_eq, sigma_max,
- * g_at_max, dgamma_eff) of the discrete numerical model (core/sim.c) against the theory's (PDE)
+ * g_at_max, dgamma_eff) of the discrete numerical model (core/sim/sim.c) against the theory's (PDE)
  * and the hybrid's (k_split), for one spectrum per call (bench/theory_map.sh runs the
  * map over D and m0).
  *

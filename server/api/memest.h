@@ -20,7 +20,7 @@
  *                          solvers' work arrays (at most --max-points values each) and 2 MiB for
  *                          each thread of a sweep.
  *   a simulation           each of its threads has a workspace of 14 real n x n arrays, one
- *                          real and three complex n x (n/2+1) arrays (core/simsolve.c); the run
+ *                          real and three complex n x (n/2+1) arrays (core/sim/simsolve.c); the run
  *                          shares four more n x n arrays (plans, the PSD's weights), plus 4 MiB.
  */
 #ifndef LJGAP_MEMEST_H

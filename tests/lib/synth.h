@@ -1,7 +1,7 @@
 /* synth.h -- synthetic periodic surfaces with a known isotropic PSD, for the topography tests
  * and benchmark (static functions: include it in one .c file).
  *
- * The conventions of core/sim.c's make_surface, on a rectangular grid: an nx × ny map with
+ * The conventions of core/sim/sim.c's make_surface, on a rectangular grid: an nx × ny map with
  * spacings dx, dy is one period of h(x) = Σ_q c_q e^{iq·x}, q = (2π i/Lx, 2π j/Ly) (angular),
  * c_{-q} = conj(c_q), |c_q| = √(P(|q|) Δqx Δqy) and a uniform random phase (GSL's mt19937), so
  * the realization's variance is the lattice sum Σ_q P(|q|) Δqx Δqy (of ∫∫ P d²k, the project's

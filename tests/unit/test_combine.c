@@ -204,7 +204,7 @@ static void no_usable_band(void **state)
 
 /* The PSD table of an n² map (pixel dx) of a synthetic surface with random phases: with gauss
  * (Gaussian amplitudes) an n² crop of a (2n)² surface, not periodic (plane removed, Hann
- * window), as a lab measures; without, one period (fixed amplitudes, as core/sim.c makes
+ * window), as a lab measures; without, one period (fixed amplitudes, as core/sim/sim.c makes
  * surfaces: the periodogram is the law mode by mode). From 4 × the map's fundamental on (in
  * place of /v1/psd's reliable band: the first bins hold few modes and the window's leakage). */
 static void map_table(size_t n, double dx, unsigned long seed, int gauss, table *t)

@@ -11,7 +11,7 @@
  *   - 1/λ wavenumbers f = k/2π: S(f) = (2π)² P(2πf) with ∫∫ S d²f = h_rms², and for the power
  *     law S = C_f f^(2D-8) with C_f = (2π)^(2D-6) C;
  *   - a random periodic surface of side L built from P on the lattice q = (2π/L)(i, j) (each
- *     wavevector the amplitude √P·2π/L and a random phase, as core/sim.c does): its height
+ *     wavevector the amplitude √P·2π/L and a random phase, as core/sim/sim.c does): its height
  *     variance, measured from the heights, is the lattice sum, which tends to m0 as L grows;
  *   - the dimensionless form P̃(k̃) = P(k)/(ε²χ²), k̃ = χk, for which m̃0 = m0/ε².
  * The tolerances are the quadratures' own error estimates (GSL) times 10, or the stated

@@ -1,4 +1,4 @@
-/* test_hybrid.c -- the hybrid model (core/sim.c with opts.k_split, core/simlaw.c) and the runs'
+/* test_hybrid.c -- the hybrid model (core/sim/sim.c with opts.k_split, core/sim/simlaw.c) and the runs'
  * threads.
  *
  * The fine band's tabulated law against the PDE at points between its nodes, within the

@@ -1,4 +1,4 @@
-/* test_sim.c -- the discrete numerical model (core/sim.c, theory.md §5).
+/* test_sim.c -- the discrete numerical model (core/sim/sim.c, theory.md §5).
  *
  * Surface: the realized variance is the lattice sum m0_grid (match_m0 = 0) or m0 (match_m0 =
  * 1) to round-off, and m0_grid -> m0 as L grows. Solver: the residual target is met at every

@@ -1,5 +1,5 @@
 /* test_topo.c -- core/topo.c: the isotropic PSD of a height map, against synthetic surfaces of
- * known PSD (tests/lib/synth.h, core/sim.c's conventions: fixed amplitudes √(P Δq²), random
+ * known PSD (tests/lib/synth.h, core/sim/sim.c's conventions: fixed amplitudes √(P Δq²), random
  * phases, so the periodogram is the law at every wavevector).
  *
  *   - periodic 512 × 512, P = C k^(2D-8) over the whole grid: P within 3 % of the law in every

@@ -1,5 +1,5 @@
-/* simsolve.h -- one realization of the discrete model (core/simsolve.c): the workspace, the
- * random surface, and the equilibrium at a prescribed mean gap. core/sim.c runs the
+/* simsolve.h -- one realization of the discrete model (core/sim/simsolve.c): the workspace, the
+ * random surface, and the equilibrium at a prescribed mean gap. core/sim/sim.c runs the
  * realizations (on threads) and gathers the result. Internal to the core.
  *
  *   sim_shared sh = {...};                    // plans, law, options: shared, read-only

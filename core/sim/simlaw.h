@@ -1,4 +1,4 @@
-/* simlaw.h -- the interface law of the discrete model (core/sim.c): the Lennard-Jones law (8),
+/* simlaw.h -- the interface law of the discrete model (core/sim/sim.c): the Lennard-Jones law (8),
  * (9), or, for the hybrid model (the paper's Section 6), the statistical mean traction of the
  * band of roughness the grid does not carry, tabulated once per run. Internal to the core;
  * tests and benchmarks use it directly.
