@@ -58,6 +58,7 @@
   function parseTable(text) {
     const k = [];
     const P = [];
+    const E = []; /* a third number on every line: P_err (as the topography card exports it) */
     const lines = text.split(/\r?\n/);
     for (let i = 0; i < lines.length; i++) {
       const line = lines[i].replace(/#.*/, "").trim();
@@ -67,6 +68,7 @@
       if (cells.length >= 2 && nums.slice(0, 2).every(Number.isFinite)) {
         k.push(nums[0]);
         P.push(nums[1]);
+        E.push(cells.length >= 3 && Number.isFinite(nums[2]) ? nums[2] : null);
       } else if (k.length === 0 && cells.some((c) => !Number.isFinite(Number(c)))) {
         continue; /* a header line */
       } else {
@@ -74,7 +76,7 @@
       }
     }
     if (k.length === 0) throw new ClientError("table", "no (k, P) rows in the table");
-    return { k, P };
+    return E.every((e) => e !== null) ? { k, P, P_err: E } : { k, P };
   }
 
   function psdObject() {
@@ -220,12 +222,25 @@
   /* Problems of one answer: beside their fields; the rest as text for the panel. */
   function placeProblem(problem, panel) {
     const loose = [];
+    const perField = {};
     for (const e of problem.errors || []) {
       const id = fieldFor(e.pointer || "", panel);
+      if (id) perField[id] = (perField[id] || 0) + 1;
+      if (id && perField[id] > 3) continue; /* a whole file of bad numbers: the first three */
       if (!id || !showFieldError(id, e.detail)) loose.push(`${e.pointer}: ${e.detail}`);
     }
-    if (!(problem.errors || []).length) loose.push(problem.detail || problem.title);
+    for (const [id, n] of Object.entries(perField)) if (n > 3) showFieldError(id, `and ${n - 3} more`);
+    if (loose.length > 5) loose.splice(5, loose.length - 5, `and ${loose.length - 5} more problems`);
     return loose;
+  }
+
+  /* The first field marked invalid (visible), brought into view and focused: null when none. */
+  function focusFirstInvalid() {
+    const bad = [...document.querySelectorAll(".invalid")].find((e) => e.offsetParent !== null);
+    if (!bad) return null;
+    bad.scrollIntoView({ block: "center" });
+    bad.focus({ preventScroll: true });
+    return bad;
   }
 
   /* ---- talking to the server ---- */
@@ -388,6 +403,7 @@
       yLabel: "σ̄/σ0",
       series: p.series,
       marks,
+      params: p.params,
       yClamp: [-1.5 * pos, 1.05],
     });
     const ro = $("readout-traction");
@@ -398,10 +414,13 @@
         { class: "meta" },
         `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)`
       ),
+      forLine(p),
       metaLine(ans),
       ...warnings(ans)
     );
   }
+
+  const forLine = (p) => el("div", { class: "meta computed-for" }, `computed for: ${p.params || "—"}`);
 
   function k2Label(k) {
     return k === null ? "∞" : String(k);
@@ -434,6 +453,15 @@
       });
       metas.push(metaLine(ans), ...warnings(ans));
     }
+    /* the x axis over where the densities live (Φ above 1e-4 of its peak), not the whole grid */
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (const s of p.series) {
+      const top = Math.max(...s.y.filter(Number.isFinite));
+      s.x.forEach((x, i) => {
+        if (s.y[i] > 1e-4 * top) (lo = Math.min(lo, x)), (hi = Math.max(hi, x));
+      });
+    }
     LJPlots.draw($("plot-pdf"), {
       title: `${plotTitles.pdf} at g̃ave = ${fmt(results[0].body.g_ave)}`,
       xLabel: "g̃",
@@ -441,8 +469,10 @@
       yLabel: "Φ(g̃)",
       series: p.series,
       yZero: true,
+      params: p.params,
+      xRange: hi > lo ? [lo - 0.03 * (hi - lo), hi + 0.03 * (hi - lo)] : undefined,
     });
-    ro.replaceChildren(t, ...metas);
+    ro.replaceChildren(t, forLine(p), ...metas);
   }
 
   function showSweep(p, ans, body) {
@@ -464,6 +494,7 @@
       yLabel: "Δγeff/Δγ, σ̄max/σ0",
       xLog: logX,
       series: p.series,
+      params: p.params,
       yZero: true,
     });
     const t = el("table", {}, el("tr", {}, ...[names[ans.vary] || ans.vary, "g̃eq", "σ̄max/σ0", "Δγeff/Δγ", "largest ± err"].map((h) => el("th", {}, h))));
@@ -474,7 +505,7 @@
     });
     const worstAll = Math.max(...r.map((o) => Math.max(...Object.values((o && o.error) || {}).map(Math.abs))));
     const details = el("details", {}, el("summary", {}, `${x.length} points, largest error ${errFmt(worstAll)}: table`), t);
-    $("readout-sweep").replaceChildren(details, metaLine(ans), ...warnings(ans));
+    $("readout-sweep").replaceChildren(details, forLine(p), metaLine(ans), ...warnings(ans));
   }
 
   /* The PSD as the form gives it (client side: a picture of the input, with its cut-offs). */
@@ -547,28 +578,30 @@
     const e = ans.error || {};
     const pe = e.pull_off_N || {};
     const po = ans.pull_off_N || {};
-    const t = el("table", {}, el("tr", {}, el("th", {}, "pull-off"), el("th", {}, "N"), el("th", {}, "± err")));
-    const names = { jkr_smooth: "JKR, flat Δγ", jkr: "JKR with Δγeff", dmt: "DMT with Δγeff", maugis_dugdale: "Maugis–Dugdale" };
-    for (const k of Object.keys(po)) t.append(el("tr", {}, el("td", {}, names[k] || k), el("td", {}, fmt(po[k], 4)), el("td", {}, errFmt(pe[k]))));
+    const t = el("table", {}, el("tr", {}, ...["quantity", "value", "unit", "± err"].map((h) => el("th", {}, h))));
+    const names = { jkr_smooth: "pull-off, JKR, flat Δγ", jkr: "pull-off, JKR with Δγeff", dmt: "pull-off, DMT with Δγeff", maugis_dugdale: "pull-off, Maugis–Dugdale" };
+    for (const k of Object.keys(po)) t.append(el("tr", {}, el("td", {}, names[k] || k), el("td", {}, fmt(po[k], 4)), el("td", {}, "N"), el("td", {}, errFmt(pe[k]))));
     const tb = ans.tabor || {};
-    t.append(el("tr", {}, el("td", {}, "Tabor μ (flat / effective)"), el("td", {}, `${fmt(tb.smooth, 4)} / ${fmt(tb.effective, 4)}`), el("td", {}, errFmt(e.tabor && e.tabor.effective))));
-    t.append(el("tr", {}, el("td", {}, "Maugis λ"), el("td", {}, fmt(ans.maugis_lambda, 4)), el("td", {}, errFmt(e.maugis_lambda))));
-    t.append(el("tr", {}, el("td", {}, "regime"), el("td", {}, ans.regime || "—"), el("td", {}, "")));
+    t.append(el("tr", {}, el("td", {}, "Tabor μ (flat / effective)"), el("td", {}, `${fmt(tb.smooth, 4)} / ${fmt(tb.effective, 4)}`), el("td", {}, "1"), el("td", {}, errFmt(e.tabor && e.tabor.effective))));
+    t.append(el("tr", {}, el("td", {}, "Maugis λ"), el("td", {}, fmt(ans.maugis_lambda, 4)), el("td", {}, "1"), el("td", {}, errFmt(e.maugis_lambda))));
+    t.append(el("tr", {}, el("td", {}, "regime"), el("td", {}, ans.regime || "—"), el("td", {}, ""), el("td", {}, "")));
     p.series = [{ name: "pull_off_N", x: Object.keys(po), y: Object.values(po), err: Object.keys(po).map((k) => pe[k]) }];
     p.xName = "model";
     $("card-contact").hidden = false;
-    $("readout-contact").replaceChildren(t, metaLine(ans), ...warnings(ans));
+    $("readout-contact").replaceChildren(t, forLine(p), metaLine(ans), ...warnings(ans));
   }
 
   /* A problem answer of panel's request: beside the fields its pointers name, the rest in the
    * panel's readout. */
   function showProblem(panel, status, json) {
-    const loose = placeProblem(json || {}, panel);
+    json = json || {};
+    const loose = placeProblem(json, panel);
     const ro = $(`readout-${panel}`);
     ro.replaceChildren(
       el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`),
       ...loose.map((t) => el("div", { class: "problem" }, t))
     );
+    panels[panel].failed = true;
     if (panel === "contact") $("card-contact").hidden = false;
     else if ($(`plot-${panel}`)) LJPlots.clear($(`plot-${panel}`));
   }
@@ -577,7 +610,41 @@
 
   let running = false;
 
-  async function run() {
+  /* The inputs a result was computed for, in one line (the "computed for" of each card). */
+  function describe(base) {
+    const q = base.psd;
+    const si = base.units === "SI";
+    const parts = [];
+    if (q.kind === "table") {
+      parts.push(`table PSD of ${q.k.length} points, k ${fmt(q.k[0], 4)} … ${fmt(q.k[q.k.length - 1], 4)}${si ? " 1/m" : ""}${q.tail ? `, tail k^${fmt(q.tail.exponent, 4)}` : ""}`);
+    } else {
+      for (const key of ["D", "H", "C", "m0", "h_rms", "k1"]) if (q[key] !== undefined) parts.push(`${key} = ${q[key]}`);
+      parts.push(`k2 = ${q.k2 === undefined || q.k2 === null ? "∞" : q.k2}`);
+    }
+    parts.push(si ? "SI" : "dimensionless");
+    if (base.method) parts.push(`method ${base.method}`);
+    const m = base.material;
+    if (m) parts.push(`material ${Object.entries(m).map(([k, v]) => `${k} = ${v}`).join(", ")}`);
+    return parts.join("; ");
+  }
+
+  /* A card with no result (a run that did not ask for it): empty, so nothing stale stays. */
+  function emptyPanel(name) {
+    resetPanel(name);
+    if ($(`plot-${name}`)) LJPlots.clear($(`plot-${name}`));
+    if ($(`readout-${name}`)) $(`readout-${name}`).textContent = "No result yet.";
+  }
+
+  /* Export buttons live only on a card with something to export. */
+  function updateExports() {
+    for (const box of document.querySelectorAll(".exports")) {
+      const p = panels[box.dataset.panel];
+      const has = !!p && (p.series.length > 0 || p.answers.length > 0);
+      for (const b of box.querySelectorAll("button")) b.disabled = !has;
+    }
+  }
+
+  async function run(opts = {}) {
     if (running) return;
     clearErrors();
     let reqs;
@@ -586,6 +653,7 @@
     } catch (e) {
       if (e instanceof ClientError) {
         showFieldError(e.fieldId, e.message);
+        focusFirstInvalid();
         setIdle("Fix the highlighted field.", true);
         return;
       }
@@ -594,10 +662,15 @@
     const base = common();
     running = true;
     $("compute").disabled = true;
+    $("compute-top").disabled = true;
     abort = new AbortController();
-    /* panels not asked for this time keep their last result (and its exports) */
-    for (const n of new Set(reqs.map((r) => r.panel))) resetPanel(n);
-    resetPanel("psd");
+    /* every calculation card starts afresh: those not asked for this time are emptied (a result
+     * of other inputs must not stay beside this one's) */
+    for (const n of ["traction", "pdf", "sweep", "contact"]) {
+      if (reqs.some((r) => r.panel === n)) resetPanel(n).params = describe(base);
+      else emptyPanel(n);
+    }
+    resetPanel("psd").params = describe(base);
     if (!reqs.some((r) => r.panel === "contact")) $("card-contact").hidden = true;
     showPsd(base, null);
     const byPanel = {};
@@ -636,15 +709,63 @@
           else if (r.panel === "contact") showContact(p0, got[0].ans);
         }
       }
-      setIdle(failed ? `${failed} of ${reqs.length} requests answered with a problem: see the highlighted fields.` : `Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`, failed > 0);
+      if (failed) {
+        const bad = focusFirstInvalid();
+        const cards = [...new Set(reqs.filter((r) => panels[r.panel].failed).map((r) => r.panel))];
+        if (!bad) $(`card-${cards[0]}`).scrollIntoView({ block: "start" });
+        setIdle(`${failed} of ${reqs.length} requests answered with a problem: ${bad ? `see the highlighted field${document.querySelectorAll(".invalid").length > 1 ? "s" : ""}` : `see the ${cards.join(", ")} card${cards.length > 1 ? "s" : ""}`}.`, true);
+      } else {
+        setIdle(`Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`);
+        const first = reqs.length ? $(`card-${reqs[0].panel}`) : null;
+        if (first && !opts.stay) {
+          const r = first.getBoundingClientRect();
+          if (r.top < 0 || r.top > innerHeight * 0.6) first.scrollIntoView({ block: "start" });
+        }
+      }
     } catch (e) {
       if (e.name === "AbortError") setIdle("Cancelled.", true);
       else setIdle(`Request failed: ${e.message}`, true);
     } finally {
       running = false;
       $("compute").disabled = false;
+      $("compute-top").disabled = false;
       abort = null;
+      updateExports();
     }
+  }
+
+  /* A measured spectrum (the SI psd object of /v1/psd or /v1/psd/combine) as the calculation's
+   * PSD with the form's material: the form switches to that table in SI, the gaps are placed
+   * about its g̃eq (asked of /v1/adhesion), and the traction, the PDF at g̃eq and, with a sphere
+   * radius, the pull-off run and are drawn. */
+  async function useSpectrum(q, label) {
+    if (running) return;
+    document.querySelector('input[name="kind"][value="table"]').checked = true;
+    const head = `k [1/m], P [m^4]${q.P_err ? ", P_err [m^4]" : ""}`;
+    const rows = q.k.map((k, i) => [k, q.P[i], ...(q.P_err ? [q.P_err[i]] : [])].join(", "));
+    $("table").value = [`# ${label}`, head, ...rows].join("\n");
+    $("tail").value = q.tail ? String(q.tail.exponent) : "";
+    $("units").value = "SI";
+    $("do-traction").checked = true;
+    $("do-pdf").checked = true;
+    $("do-sweep").checked = false;
+    $("pdf-k2").value = "∞";
+    for (const id of ["grid-min", "grid-max", "grid-n"]) $(id).value = "";
+    $("method").value = "pde";
+    $("preset-note").textContent = `The measured spectrum (${label}) in SI with the material above.`;
+    syncVisibility();
+    const base = common();
+    setBusy("adhesion of the measured spectrum (for the range of gaps)");
+    const res = await post("adhesion", JSON.stringify({ psd: base.psd, material: base.material, units: "SI" }));
+    if (res.status === 200 && Number.isFinite(res.json.g_eq)) {
+      const g = res.json.g_eq;
+      $("g-min").value = fmt(Math.max(0.5, 0.85 * g), 4);
+      $("g-max").value = fmt(Math.max(2 * g, g + 2), 4);
+      $("pdf-g").value = fmt(g, 5);
+    }
+    setIdle("");
+    await run({ stay: true });
+    $("card-traction").scrollIntoView({ block: "start" });
   }
 
   /* ---- exports ---- */
@@ -663,10 +784,46 @@
     return /[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s;
   };
 
-  /* Every plotted series of a panel, long form: series, x, y, error. */
-  function panelCSV(name) {
+  /* The server's own CSV (docs/api.md "CSV": units, the summary, SI and the errors) of each
+   * request of the panel it answered, one after another with the request as a # line; the
+   * panels whose answers have no CSV form write their series with units (pageCSV). */
+  const SERVER_CSV = ["traction", "pdf", "sweep"];
+  async function panelCSV(name) {
     const p = panels[name];
-    const lines = [["series", p.xName, "value", "error"].map(csvCell).join(",")];
+    if (name === "contact") return contactCSV(p);
+    if (name === "topo") return (typeof LJTopo !== "undefined" && LJTopo.psdCSV()) || pageCSV(name);
+    if (!SERVER_CSV.includes(name)) return pageCSV(name);
+    const parts = [];
+    for (const [i, r] of p.requests.entries()) {
+      const a = p.answers[i];
+      if (!a || (a.type && a.status >= 400)) continue; /* a refused request has no CSV */
+      const res = await fetch(`/v1/${r.endpoint}`, { method: "POST", headers: { "Content-Type": "application/json", Accept: "text/csv" }, body: r.text });
+      const text = await res.text();
+      if (!res.ok) throw new Error(`the server's CSV of ${r.endpoint}: ${res.status}`);
+      parts.push(`# request: POST /v1/${r.endpoint}${r.label ? ` (${r.label})` : ""} ${r.text}\n${text}`);
+    }
+    return parts.join("\n");
+  }
+
+  /* The pull-off card as CSV: one row a quantity, with its unit and error. */
+  function contactCSV(p) {
+    const a = p.answers.find((x) => x && x.pull_off_N) || {};
+    const e = a.error || {};
+    const lines = [`# ljgap contact: ${p.params || ""}`, "quantity,value,unit,error"];
+    for (const [k, v] of Object.entries(a.pull_off_N || {})) lines.push([`pull_off_N.${k}`, v, "N", (e.pull_off_N || {})[k]].map(csvCell).join(","));
+    const tb = a.tabor || {};
+    for (const k of Object.keys(tb)) lines.push([`tabor.${k}`, tb[k], "1", (e.tabor || {})[k]].map(csvCell).join(","));
+    lines.push(["maugis_lambda", a.maugis_lambda, "1", e.maugis_lambda].map(csvCell).join(","));
+    lines.push(["regime", a.regime, "", ""].map(csvCell).join(","));
+    return lines.join("\n") + "\n";
+  }
+
+  /* Every plotted series of a panel, long form: series, x, y, error, with the axes' units. */
+  function pageCSV(name) {
+    const p = panels[name];
+    const fig = $(`plot-${name}`) ? LJPlots.figure($(`plot-${name}`)) : null;
+    const lines = [`# ljgap ${name}: ${p.params || p.title}`];
+    lines.push(["series", fig ? fig.xLabel : p.xName, fig ? `value: ${fig.yLabel}` : "value", "error"].map(csvCell).join(","));
     for (const s of p.series) {
       s.x.forEach((x, i) => {
         if (s.y[i] === null || s.y[i] === undefined) return;
@@ -711,25 +868,32 @@
     }
   }
 
+  const cardNames = { traction: "Traction", pdf: "PDF", sweep: "Sweep", psd: "PSD", contact: "Pull-off", jobs: "Simulation", topo: "Topography" };
+
   function addExports() {
     for (const box of document.querySelectorAll(".exports")) {
       const name = box.dataset.panel;
       const b = (label, fn) => {
-        const btn = el("button", { type: "button", "data-export": label.toLowerCase().replace(/ /g, "-") }, label);
-        btn.addEventListener("click", () => {
+        /* named by its card ("Traction CSV"), for the eye and for a screen reader */
+        const btn = el("button", { type: "button", "data-export": label.toLowerCase().replace(/ /g, "-"), disabled: "" }, `${cardNames[name]} ${label}`);
+        btn.addEventListener("click", async () => {
           if (!panels[name] || (!panels[name].series.length && !panels[name].requests.length)) {
             setIdle("Nothing to export yet: compute first.", true);
             return;
           }
-          fn();
+          try {
+            await fn();
+          } catch (e) {
+            setIdle(`Export failed: ${e.message}`, true);
+          }
         });
         box.append(btn);
       };
-      b("CSV", () => download(`ljgap-${name}.csv`, new Blob([panelCSV(name)], { type: "text/csv" })));
+      b("CSV", async () => download(`ljgap-${name}.csv`, new Blob([await panelCSV(name)], { type: "text/csv" })));
       b("JSON", () => download(`ljgap-${name}.json`, new Blob([panelJSON(name)], { type: "application/json" })));
       if (name !== "contact") {
         b("PNG", async () => {
-          const blob = await LJPlots.toPNG($(`plot-${name}`));
+          const blob = await LJPlots.toPNG($(`plot-${name}`), panels[name].params);
           if (blob) download(`ljgap-${name}.png`, blob);
         });
       }
@@ -803,7 +967,34 @@
 
   /* ---- visibility of optional parts ---- */
 
+  /* χ = 3ε²E* / (16Δγ) (theory.md (15)) of the form's material, in m; null when not a number. */
+  function chiOf(m) {
+    if (!m) return null;
+    let E = m.E_star;
+    if (E === undefined && [m.E1, m.nu1, m.E2, m.nu2].every((v) => typeof v === "number")) E = 1 / ((1 - m.nu1 * m.nu1) / m.E1 + (1 - m.nu2 * m.nu2) / m.E2);
+    const chi = (3 * m.epsilon * m.epsilon * E) / (16 * m.dgamma);
+    return Number.isFinite(chi) && chi > 0 ? chi : null;
+  }
+
+  /* SI mode: the fields say their units, k1 its minimum k0/χ, the sweep its variable's unit. */
+  function syncUnits() {
+    const si = $("units").value === "SI";
+    const chi = chiOf(materialObject());
+    const min = si ? (chi ? `> k0/χ = ${fmt(K0 / chi, 4)} 1/m` : "> k0/χ: give the material") : "> k̃0 ≈ 0.46978";
+    $("k1-label").textContent = si ? `k1 (lower cut-off, 1/m, ${min})` : `k̃1 (lower cut-off, ${min})`;
+    $("k2-label").textContent = si ? "k2 (upper cut-off, 1/m)" : "k̃2 (upper cut-off)";
+    $("table-label").textContent = si
+      ? "k (1/m), P (m⁴) per line (CSV; # comments and a header line are skipped; a third column is P_err)"
+      : "k̃, P̃S per line (CSV; # comments and a header line are skipped; a third column is P_err)";
+    const levels = si ? { C: "C (P = C k^(2D−8), m^(2D−4))", m0: "m0 (height variance, m²)", h_rms: "h_rms (m)" } : { C: "C (P̃S = C k̃^(2D−8))", m0: "m̃0 (height variance)", h_rms: "h_rms" };
+    for (const o of $("level-kind").options) o.textContent = levels[o.value];
+    const vary = si ? { m0: "m0 (m²)", C: "C (SI)", D: "D", k1: "k1 (1/m)" } : { m0: "m̃0", C: "C", D: "D", k1: "k̃1" };
+    for (const o of $("vary").options) o.textContent = vary[o.value];
+    $("sweep-units").textContent = si ? "values in SI, as the PSD" : "";
+  }
+
   function syncVisibility() {
+    syncUnits();
     const table = document.querySelector('input[name="kind"]:checked').value === "table";
     $("power-fields").hidden = table;
     $("table-fields").hidden = !table;
@@ -824,7 +1015,9 @@
     p.series = series;
     p.xName = figOpts.xName || "x";
     p.answers = answers;
-    return LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, ...figOpts });
+    const u = LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, params: p.params, ...figOpts });
+    updateExports();
+    return u;
   }
 
   async function probeJobs() {
@@ -863,7 +1056,8 @@
       b.addEventListener("click", () => applyPreset(b.dataset.preset));
     }
     $("cancel").addEventListener("click", () => abort && abort.abort());
-    for (const id of ["k2-inf", "method", "use-material", "modulus-kind"]) $(id).addEventListener("change", syncVisibility);
+    for (const id of ["k2-inf", "method", "use-material", "modulus-kind", "units"]) $(id).addEventListener("change", syncVisibility);
+    for (const id of ["E_star", "E1", "nu1", "E2", "nu2", "dgamma", "epsilon"]) $(id).addEventListener("input", syncUnits);
     for (const r of document.querySelectorAll('input[name="kind"]')) r.addEventListener("change", syncVisibility);
     $("table-file").addEventListener("change", async () => {
       const f = $("table-file").files[0];
@@ -888,10 +1082,11 @@
       LJTopo.init({
         panels, post, el, val, fmt, errFmt, clearErrors, placeProblem, showFieldError, showSeries,
         resetPanel, materialObject, summaryTable, metaLine, warnings, setBusy, setIdle, download,
+        updateExports, emptyPanel, useSpectrum, focusFirstInvalid,
       });
     }
   }
 
-  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem };
+  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem, describe };
   init();
 })();

@@ -219,9 +219,17 @@ test("exports: CSV, JSON, PNG of the plot and copy as curl with the exact reques
     const [dl] = await Promise.all([page.waitForEvent("download"), page.click(sel)]);
     return fs.readFileSync(await dl.path());
   };
+  // the traction CSV is the server's own for the same request: units, the summary with its
+  // errors, the request itself, one row per gap with its error
   const csv = (await save('[data-panel="traction"] [data-export="csv"]')).toString().trim().split("\n");
-  assert.equal(csv[0], "series,g_ave,value,error");
-  assert.ok(csv.length > 400, `${csv.length} CSV lines`);
+  assert.match(csv[0], /^# request: POST \/v1\/traction \{"psd":\{"kind":"power","D":2\.5/);
+  assert.ok(csv.some((l) => /^# summary\.g_eq \[eps\] = 2\.602\d* ± \d/.test(l)), "g_eq with its unit and error");
+  assert.ok(csv.some((l) => /^# summary\.dgamma_eff \[dgamma\] = 0\.201\d* ± /.test(l)), "Δγeff with its unit");
+  const head = csv.findIndex((l) => !l.startsWith("#"));
+  assert.equal(csv[head], "g_ave [eps],sigma [sigma0],sigma_err [sigma0]");
+  assert.equal(csv.length - head - 1, 200, "one row per gap");
+  // the buttons say which card they export
+  assert.equal(await page.textContent('[data-panel="traction"] [data-export="csv"]'), "Traction CSV");
   const json = JSON.parse(await save('[data-panel="traction"] [data-export="json"]'));
   assert.equal(json.series.length, 3);
   assert.equal(json.requests[0].url, `${origin}/v1/traction`);
