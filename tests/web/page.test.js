@@ -37,6 +37,18 @@ let page;
 let userDir;
 let stateDir; // the daemon's job store, removed at the end
 const consoleErrors = [];
+const intended = []; // 4xx answers a test provoked on purpose (see expect4xx)
+let allow4xx = false;
+/* Runs fn while the page may log its fetches' 4xx answers (a test of a refusal): any other
+ * console error still fails the last test. */
+async function expect4xx(fn) {
+  allow4xx = true;
+  try {
+    return await fn();
+  } finally {
+    allow4xx = false;
+  }
+}
 const requests = [];
 const foreign = [];
 
@@ -82,7 +94,12 @@ before(async () => {
     return route.abort();
   });
   page = ctx.pages()[0] || (await ctx.newPage());
-  page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text()); });
+  page.on("console", (m) => {
+    if (m.type() !== "error") return;
+    const t = m.text();
+    if (allow4xx && /^Failed to load resource: the server responded with a status of 4\d\d/.test(t)) return intended.push(t);
+    consoleErrors.push(t);
+  });
   page.on("pageerror", (e) => consoleErrors.push(String(e)));
   await page.addInitScript(() => {
     window.__csp = [];
@@ -480,6 +497,141 @@ test("several measured maps: each one's PSD, their combination with its error ba
   await page.uncheck("#use-material");
 });
 
+test("issue 30: a height map through \"Use this spectrum\" to traction, PDF and pull-off in SI", async () => {
+  const file = path.join(userDir, "use-map.txt");
+  execFileSync(path.join(BUILD, "bench/topo"), ["gen", file, "128"]);
+  await page.setViewportSize({ width: 1280, height: 900 });
+  await page.check("#use-material");
+  await page.selectOption("#modulus-kind", "E_star");
+  await page.fill("#E_star", "1e11");
+  await page.fill("#R", "1e-5");
+  await page.setInputFiles("#topo-file", file);
+  await page.fill("#topo-dx", "1e-8");
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of|refused/.test(document.getElementById("status-text").textContent));
+  // the fit band and the reliable band on the PSD plot
+  const tf = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo")));
+  assert.ok(tf.marks.filter((m) => m.label === "fit band").length === 2, "fit band marked");
+  assert.ok(tf.marks.some((m) => m.label === "reliable from"), "reliable band marked");
+  assert.equal(await page.getAttribute("#topo-use", "class"), "primary");
+  assert.match(await page.textContent("#topo-use"), /^Use this spectrum$/);
+  await page.click("#topo-use");
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done|problem|failed/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /^Done: 3 requests/);
+  assert.ok((await inked("plot-traction")) > 2000, "traction canvas is blank");
+  assert.ok((await inked("plot-pdf")) > 1000, "PDF canvas is blank");
+  assert.ok(await page.isVisible("#card-contact"), "the pull-off card");
+  assert.match(await page.textContent("#readout-contact"), /pull-off, JKR with Δγeff.*N/);
+  assert.match(await page.textContent("#readout-traction"), /J\/m²/); // Δγeff in SI
+  assert.match(await page.textContent("#readout-traction"), /computed for: table PSD of \d+ points.*1\/m.*SI; material E_star = 100000000000/);
+  const j = await page.evaluate(() => JSON.parse(LJApp.panelJSON("traction")));
+  const body = j.requests[0].body;
+  assert.equal(body.units, "SI");
+  assert.equal(body.material.E_star, 1e11);
+  assert.equal(body.psd.kind, "table");
+  assert.equal(body.psd.P_err.length, body.psd.k.length, "the psd object's errors go along");
+  const topo = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  assert.equal(body.psd.k[0], Number(await page.inputValue("#topo-k1")));
+  assert.ok(body.psd.k.length > 3 && topo.answers[0].psd.k.includes(body.psd.k[1]));
+  // the g̃ range is placed about g̃eq, and the PDF is asked at g̃eq
+  const geq = j.answers[0].summary.g_eq;
+  assert.ok(body.g_ave.min < geq && body.g_ave.max > geq, `g range ${JSON.stringify(body.g_ave)} about ${geq}`);
+  // the view is on the results
+  const top = await page.evaluate(() => document.getElementById("card-traction").getBoundingClientRect().top);
+  assert.ok(top >= 0 && top < 900, `traction card at ${top}`);
+  // the card's own CSV export reads back into the table input
+  const [dl] = await Promise.all([page.waitForEvent("download"), page.click('[data-panel="topo"] [data-export="csv"]')]);
+  const csv = fs.readFileSync(await dl.path(), "utf8");
+  assert.match(csv, /^k \[1\/m\],P \[m\^4\],P_err \[m\^4\]$/m);
+  await page.fill("#table", csv);
+  const back = (await page.evaluate(() => LJApp.requests())).find((r) => r.panel === "traction").body.psd;
+  assert.deepEqual(back.k, topo.answers[0].psd.k);
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-use-spectrum.png"), fullPage: false });
+  await page.fill("#R", "");
+  await page.fill("#E_star", "1e9");
+  await page.uncheck("#use-material");
+});
+
+test("issue 30: a binary file is one line, not a list of problems; nothing stale stays", async () => {
+  const png = Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13, 73, 72, 68, 82]);
+  const before = requests.length;
+  await page.setInputFiles("#topo-file", { name: "image.png", mimeType: "image/png", buffer: png });
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /not a height map/.test(document.getElementById("status-text").textContent));
+  assert.equal(await page.textContent('.err[data-for="topo-file"]'), "not a height map: image.png is a PNG image; export the heights as text (one row a line)");
+  assert.equal(requests.slice(before).filter((u) => u.includes("/v1/")).length, 0, "nothing sent");
+  // the previous map's plot and k1 are gone, its exports off
+  assert.equal(await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo"))), null);
+  assert.equal(await page.inputValue("#topo-k1"), "");
+  assert.equal(await page.isDisabled('[data-panel="topo"] [data-export="csv"]'), true);
+  // Fig. 6 (traction and sweep), then Fig. 4 (traction only): no sweep of Fig. 6 stays
+  await page.setInputFiles("#topo-file", []);
+  assert.match(await runAndWait('[data-preset="fig6"]'), /^Done/);
+  assert.ok((await inked("plot-sweep")) > 500);
+  assert.match(await runAndWait('[data-preset="fig4"]'), /^Done/);
+  assert.equal(await page.textContent("#readout-sweep"), "No result yet.");
+  assert.equal(await page.evaluate(() => LJPlots.figure(document.getElementById("plot-sweep"))), null);
+  assert.equal(await page.isDisabled('[data-panel="sweep"] [data-export="csv"]'), true);
+  assert.match(await page.textContent("#readout-traction"), /computed for: D = 2\.5; C = 0\.0795775; k1 = 1; k2 = ∞; dimensionless/);
+});
+
+test("issue 30: a bad field puts the view and the focus on it", async () => {
+  await runAndWait('[data-preset="fig4"]');
+  await page.evaluate(() => window.scrollTo(0, document.body.scrollHeight));
+  await page.fill("#k1", "0.3");
+  const status = await expect4xx(() => runAndWait("#compute-top"));
+  assert.match(status, /^1 of 1 requests answered with a problem: see the highlighted field\.$/);
+  assert.equal(await page.evaluate(() => document.activeElement.id), "k1");
+  const r = await page.evaluate(() => { const b = document.getElementById("k1").getBoundingClientRect(); return [b.top, b.bottom, innerHeight]; });
+  assert.ok(r[0] > 0 && r[1] < r[2], `k1 at ${r[0]}..${r[1]} of ${r[2]}`);
+  assert.match(await page.textContent('.err[data-for="k1"]'), /k0 = 0\.46978/);
+  assert.match(await page.textContent("#readout-traction"), /^422 /);
+  // a problem no field claims: "see the traction card", never "highlighted"
+  await page.fill("#k1", "1");
+  await page.evaluate(() => LJApp.showProblem("traction", 422, { title: "Cap exceeded", detail: "the computation hit its cap", errors: [] }));
+  assert.equal((await page.textContent("#readout-traction")).match(/hit its cap/g).length, 1, "said once");
+});
+
+test("issue 30: the default simulation starts (no 4xx) and its job survives a reload", async () => {
+  const api = await (await fetch(`${origin}/openapi.json`)).json();
+  if (!(api.paths || {})["/v1/simulations"]) return;
+  await page.goto(`${origin}/`); // a fresh page: every field at its default
+  await page.waitForSelector("#sim-start");
+  const [resp] = await Promise.all([
+    page.waitForResponse((r) => r.url().endsWith("/v1/simulations") && r.request().method() === "POST"),
+    page.click("#sim-start"),
+  ]);
+  assert.equal(resp.status(), 202, `the defaults: ${await resp.text()}`);
+  const body = JSON.parse(resp.request().postData());
+  assert.equal(body.psd.k2, 8);
+  const id = (await resp.json()).id;
+  assert.match(page.url(), new RegExp(`#job=${id}$`));
+  await page.reload();
+  await page.waitForFunction((i) => document.getElementById("sim-state").textContent.includes(i.slice(0, 8)), id);
+  assert.equal(await page.isDisabled("#sim-cancel"), false);
+  await page.click("#sim-cancel");
+  await page.waitForFunction(() => /cancelled|done/.test(document.getElementById("sim-state").textContent));
+  await page.waitForFunction(() => !location.hash);
+});
+
+test("issue 30: at 390 × 844 the page does not scroll sideways; Compute is on screen", async () => {
+  await page.setViewportSize({ width: 390, height: 844 });
+  await runAndWait('[data-preset="fig4"]');
+  await page.check("#do-pdf");
+  await page.check("#do-sweep");
+  await runAndWait("#compute-top");
+  const w = await page.evaluate(() => [document.documentElement.scrollWidth, document.body.scrollWidth, innerWidth]);
+  assert.ok(w[0] <= 390 && w[1] <= 390, `page ${w[0]} px wide at 390`);
+  const head = await page.evaluate(() => document.querySelector("header").getBoundingClientRect().height);
+  assert.ok(head < 100, `header ${head} px`);
+  await page.evaluate(() => window.scrollTo(0, 3000));
+  const c = await page.evaluate(() => { const b = document.getElementById("compute-top").getBoundingClientRect(); return [b.top, b.bottom]; });
+  assert.ok(c[0] >= 0 && c[1] <= 844, `Compute at ${c}`);
+  await page.evaluate(() => window.scrollTo(0, 0));
+  await page.screenshot({ path: path.join(BUILD, "web-screenshot-phone.png"), fullPage: true });
+  await page.setViewportSize({ width: 1400, height: 1000 });
+});
+
 test("the icon: /favicon.svg linked and served, /favicon.ico served (no 404)", async () => {
   assert.equal(await page.getAttribute('link[rel="icon"]', "href"), "favicon.svg");
   for (const [p, type] of [["/favicon.svg", "image/svg+xml"], ["/favicon.ico", "image/x-icon"]]) {
@@ -498,6 +650,7 @@ test("all panels for the screenshot; no console error at all, no CSP violation, 
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(BUILD, "web-screenshot.png"), fullPage: true });
   assert.deepEqual(consoleErrors, []);
+  assert.ok(intended.every((t) => / 422 /.test(t)), String(intended));
   assert.deepEqual(await page.evaluate(() => window.__csp), []);
   assert.deepEqual(foreign, []);
   assert.ok(requests.length > 10);
