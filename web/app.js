@@ -364,15 +364,23 @@
   const flatLJ = (g) => (3 * Math.sqrt(3) / 2) * (Math.pow(g, -3) - Math.pow(g, -9));
   const maxAbs = (a) => a.reduce((m, v) => Math.max(m, Math.abs(v)), 0);
 
+  /* Plots in SI: with a material (its answers have si) unless the switch says dimensionless. */
+  const siPlots = (ans) => !!(ans && ans.si && $("si-plots").checked);
+
   function showTraction(p, ans) {
     const s = ans.summary;
-    const g = ans.g_ave;
-    const area = g.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? ans.sigma[i] : null));
-    const flat = g.map(flatLJ);
-    p.xName = "g_ave";
+    const si = siPlots(ans);
+    /* in SI: gaps in m (ε g̃), tractions in Pa (σ0 σ̄/σ0) */
+    const gx = si ? ans.si.g_ave_m[0] / ans.g_ave[0] : 1; /* ε */
+    const sy = si ? ans.si.sigma0_Pa : 1;
+    const g = ans.g_ave.map((x) => x * gx);
+    const sig = ans.sigma.map((v) => v * sy);
+    const area = ans.g_ave.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? sig[i] : null));
+    const flat = ans.g_ave.map((x) => flatLJ(x) * sy);
+    p.xName = si ? "g_ave [m]" : "g_ave";
     p.series = [
-      { name: "σ̄/σ0 (rough)", x: g, y: ans.sigma, err: ans.error.sigma, color: COLORS[0] },
-      { name: "σ/σ0 flat LJ (8)", x: g, y: flat, color: "#777", dash: [6, 4], width: 1.5 },
+      { name: si ? "σ̄ (rough, Pa)" : "σ̄/σ0 (rough)", x: g, y: sig, err: si ? ans.si.error.sigma_Pa : ans.error.sigma, color: COLORS[0] },
+      { name: si ? "σ flat LJ (8), Pa" : "σ/σ0 flat LJ (8)", x: g, y: flat, color: "#777", dash: [6, 4], width: 1.5 },
       {
         name: "Δγeff area",
         x: g,
@@ -382,29 +390,29 @@
         width: 0,
       },
     ];
-    const pos = Math.max(...ans.sigma.filter(Number.isFinite), ...flat);
+    const pos = Math.max(...sig.filter(Number.isFinite), ...flat);
     const marks = [];
     if (s.g_eq !== null) {
-      marks.push({ type: "vline", x: s.g_eq, label: `g̃eq = ${fmt(s.g_eq, 4)}`, color: "#2e933c" });
+      marks.push({ type: "vline", x: s.g_eq * gx, label: si ? `geq = ${fmt(s.g_eq * gx, 4)} m` : `g̃eq = ${fmt(s.g_eq, 4)}`, color: "#2e933c" });
     }
     if (s.sigma_max !== null) {
       marks.push({
         type: "point",
-        x: s.g_at_max,
-        y: s.sigma_max,
-        label: `σ̄max/σ0 = ${fmt(s.sigma_max, 4)}`,
+        x: s.g_at_max * gx,
+        y: s.sigma_max * sy,
+        label: si ? `σ̄max = ${fmt(s.sigma_max * sy, 4)} Pa` : `σ̄max/σ0 = ${fmt(s.sigma_max, 4)}`,
         color: "#d1495b",
       });
     }
     LJPlots.draw($("plot-traction"), {
       title: plotTitles.traction,
-      xLabel: "g̃ave",
-      xName: "g̃ave",
-      yLabel: "σ̄/σ0",
+      xLabel: si ? "gave (m)" : "g̃ave",
+      xName: si ? "gave (m)" : "g̃ave",
+      yLabel: si ? "σ̄ (Pa)" : "σ̄/σ0",
       series: p.series,
       marks,
       params: p.params,
-      yClamp: [-1.5 * pos, 1.05],
+      yClamp: [-1.5 * pos, 1.05 * sy],
     });
     const ro = $("readout-traction");
     ro.replaceChildren(
@@ -437,7 +445,8 @@
       ans.pdfs.forEach((pdf, i) => {
         const name = label ? `${label}, k̃2 = ${k2Label(pdf.k2)}` : `k̃2 = ${k2Label(pdf.k2)}`;
         const e = (ans.error.pdfs || [])[i] || {};
-        p.series.push({ name, x: pdf.g, y: pdf.phi, color: COLORS[c++ % COLORS.length], errL1: e.phi_l1 });
+        const sp = siPlots(ans) ? ans.si.pdfs[i] : null; /* in SI: g in m, Φ in 1/m */
+        p.series.push({ name, x: sp ? sp.g_m : pdf.g, y: sp ? sp.phi_per_m : pdf.phi, color: COLORS[c++ % COLORS.length], errL1: e.phi_l1 });
         t.append(
           el(
             "tr",
@@ -462,11 +471,12 @@
         if (s.y[i] > 1e-4 * top) (lo = Math.min(lo, x)), (hi = Math.max(hi, x));
       });
     }
+    const pdfSI = siPlots(results[0].ans);
     LJPlots.draw($("plot-pdf"), {
       title: `${plotTitles.pdf} at g̃ave = ${fmt(results[0].body.g_ave)}`,
-      xLabel: "g̃",
-      xName: "g̃",
-      yLabel: "Φ(g̃)",
+      xLabel: pdfSI ? "g (m)" : "g̃",
+      xName: pdfSI ? "g (m)" : "g̃",
+      yLabel: pdfSI ? "Φ (1/m)" : "Φ(g̃)",
       series: p.series,
       yZero: true,
       params: p.params,

@@ -296,6 +296,23 @@ test("material and sphere radius: SI values and the contact panel", async () => 
   assert.match(contact, /JKR with Δγeff/);
   assert.match(contact, /regime/);
   assert.match(await page.textContent("#readout-traction"), /\d ± [^ ]+ J\/m²/); // SI values with their errors
+  // issue 30: with a material the plots are in SI, a switch goes back to the paper's units;
+  // the pull-off table and CSV carry units, μ, λ and the regime
+  let tf = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")));
+  assert.deepEqual([tf.xLabel, tf.yLabel], ["gave (m)", "σ̄ (Pa)"]);
+  assert.deepEqual(await page.$$eval("#readout-contact table tr:first-child th", (t) => t.map((e) => e.textContent)), ["quantity", "value", "unit", "± err"]);
+  assert.match(await page.textContent("#readout-contact"), /Maugis λ[\d.e+-]+1/);
+  const [dl] = await Promise.all([page.waitForEvent("download"), page.click('[data-panel="contact"] [data-export="csv"]')]);
+  const pc = fs.readFileSync(await dl.path(), "utf8");
+  assert.match(pc, /^quantity,value,unit,error$/m);
+  assert.match(pc, /^pull_off_N\.jkr,[\d.e+-]+,N,[\d.e+-]+$/m);
+  assert.match(pc, /^maugis_lambda,/m);
+  assert.match(pc, /^regime,\w/m);
+  await page.uncheck("#si-plots");
+  assert.match(await runAndWait("#compute"), /^Done: 2 requests/);
+  tf = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")));
+  assert.deepEqual([tf.xLabel, tf.yLabel], ["g̃ave", "σ̄/σ0"]);
+  await page.check("#si-plots");
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-contact.png"), fullPage: true });
 });
@@ -523,6 +540,7 @@ test("issue 30: a height map through \"Use this spectrum\" to traction, PDF and 
   assert.ok(await page.isVisible("#card-contact"), "the pull-off card");
   assert.match(await page.textContent("#readout-contact"), /pull-off, JKR with Δγeff.*N/);
   assert.match(await page.textContent("#readout-traction"), /J\/m²/); // Δγeff in SI
+  assert.equal((await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")))).xLabel, "gave (m)");
   assert.match(await page.textContent("#readout-traction"), /computed for: table PSD of \d+ points.*1\/m.*SI; material E_star = 100000000000/);
   const j = await page.evaluate(() => JSON.parse(LJApp.panelJSON("traction")));
   const body = j.requests[0].body;
