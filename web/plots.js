@@ -69,6 +69,36 @@ const LJPlots = (() => {
     ctx.restore();
   }
 
+  /* Error bars (± err) on the series drawn as points (numerical results, sweeps, measured bins). */
+  function drawErrorBars(u, fig, k = 1) {
+    const ctx = u.ctx;
+    const dpr = (devicePixelRatio || 1) * k;
+    ctx.save();
+    fig.series.forEach((s, si) => {
+      if (!s.points || !s.err || (u.series[si + 1] && u.series[si + 1].show === false)) return;
+      ctx.strokeStyle = s.color || "#333";
+      ctx.lineWidth = 1.2 * dpr;
+      s.x.forEach((x, i) => {
+        const y = s.y[i];
+        const e = s.err[i];
+        if (!Number.isFinite(y) || !Number.isFinite(e) || !(e > 0)) return;
+        const px = u.valToPos(x, "x", true);
+        const lo = u.valToPos(fig.yLog ? Math.max(y - e, y * 1e-3) : y - e, "y", true);
+        const hi = u.valToPos(y + e, "y", true);
+        if (![px, lo, hi].every(Number.isFinite) || Math.abs(lo - hi) < 2 * dpr) return;
+        ctx.beginPath();
+        ctx.moveTo(px, lo);
+        ctx.lineTo(px, hi);
+        ctx.moveTo(px - 3 * dpr, lo);
+        ctx.lineTo(px + 3 * dpr, lo);
+        ctx.moveTo(px - 3 * dpr, hi);
+        ctx.lineTo(px + 3 * dpr, hi);
+        ctx.stroke();
+      });
+    });
+    ctx.restore();
+  }
+
   /* The y range: data range with margins, optionally clamped (fig.yClamp = [lo, hi]). */
   function yRange(fig) {
     return (u, lo, hi) => {
@@ -151,7 +181,7 @@ const LJPlots = (() => {
       axes: [axis(fig.xLabel, fig.xLog, {}, k), axis(fig.yLabel, fig.yLog, { size: 64 * k }, k)],
       legend: { live: true, show: k === 1 },
       cursor: { drag: { x: true, y: false }, show: k === 1 },
-      hooks: { draw: [(u) => drawMarks(u, fig.marks || [], k)] },
+      hooks: { draw: [(u) => drawErrorBars(u, fig, k), (u) => drawMarks(u, fig.marks || [], k)] },
     };
   }
 
@@ -187,9 +217,9 @@ const LJPlots = (() => {
   }
 
   /* PNG of the chart in el: white background, title, the plot canvas, a legend line. */
-  function toPNG(el, params) {
+  async function toPNG(el, params) {
     const c = charts.get(el);
-    if (!c) return Promise.resolve(null);
+    if (!c) return null;
     /* at least 2 pixels per CSS pixel: the chart drawn again at that ratio when the screen's is lower */
     let src = c.u.ctx.canvas;
     let dpr = devicePixelRatio || 1;
@@ -200,6 +230,7 @@ const LJPlots = (() => {
       box.style.cssText = "position:absolute;left:-100000px;top:0;";
       document.body.append(box);
       tmp = new uPlot(options(c.fig, c.u.width * k, k), c.u.data, box);
+      await new Promise((r) => setTimeout(r, 0)); /* uPlot sizes and draws in a microtask */
       src = tmp.ctx.canvas;
       dpr = 2;
       tmp.box = box;

@@ -253,6 +253,9 @@ test("exports: CSV, JSON, PNG of the plot and copy as curl with the exact reques
   const png = await save('[data-panel="traction"] [data-export="png"]');
   assert.deepEqual([...png.subarray(0, 8)], [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
   assert.ok(png.length > 5000);
+  // at twice the chart's size (IHDR width), with the parameters printed under it
+  const plotWidth = await page.evaluate(() => document.querySelector("#plot-traction canvas").clientWidth);
+  assert.ok(png.readUInt32BE(16) >= 2 * plotWidth, `PNG ${png.readUInt32BE(16)} px for a ${plotWidth} px chart`);
   await page.click('[data-panel="traction"] [data-export="copy-as-curl"]');
   const curl = await page.inputValue("#curl-text");
   assert.match(curl, new RegExp(`^curl -s ${origin}/v1/traction `));
