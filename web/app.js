@@ -1041,7 +1041,7 @@
     if (!op || !op.post || /planned/i.test(op.post.summary || "") || typeof LJJobs === "undefined") return;
     LJJobs.init({
       common, post, el, list, val, fmt, errFmt, clearErrors, showSeries,
-      placeProblem,
+      placeProblem, setIdle, focusFirstInvalid,
       claim: collectClaims,
       /* a simulation starts the panel afresh, unless it is kept beside the previous job */
       panel: (name, { keep, ...req }) => {

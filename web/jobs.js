@@ -101,6 +101,10 @@ const LJJobs = (() => {
     const loose = api.placeProblem(json, "jobs");
     $("sim-state").textContent = `${status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}`;
     $("sim-state").dataset.status = "refused";
+    /* the header and the view say it too: the field that was refused, else the job's line */
+    const bad = api.focusFirstInvalid ? api.focusFirstInvalid() : null;
+    if (!bad) $("sim-state").scrollIntoView({ block: "center" });
+    if (api.setIdle) api.setIdle(`The simulation was refused (${status}): ${bad ? "see the highlighted field" : "see the simulation card"}.`, true);
   }
 
   function state(s, what) {
@@ -194,7 +198,8 @@ const LJJobs = (() => {
     current = null;
     $("sim-start").disabled = false;
     $("sim-cancel").disabled = true;
-    if (text) $("sim-state").textContent += ` — ${text}`;
+    /* "done in 3.1 s" replaces the last poll's "done, 100 %, 3.1 s" rather than repeating it */
+    if (text) $("sim-state").textContent = $("sim-state").textContent.replace(/: (done|cancelled|failed), \d+ %, [^,]*$/, ": $1") + ` — ${text}`;
   }
 
   async function cancel() {

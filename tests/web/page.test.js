@@ -369,6 +369,10 @@ test("simulation jobs: a form with a progress bar when the server offers them, e
   await page.evaluate((p) => LJJobs.refused(422, p), problem);
   assert.equal(await page.evaluate(() => document.getElementById("sim-state").dataset.status), "refused");
   assert.match(await page.textContent('.err[data-for="sim-n"]'), /even/);
+  // issue 30: the header says so (not "Ready.") and the view and focus are on the field
+  assert.match(await page.textContent("#status-text"), /^The simulation was refused \(422\): see the highlighted field\.$/);
+  assert.equal(await page.evaluate(() => document.activeElement.id), "sim-n");
+  assert.match(await page.textContent("#sim-state"), /^422 Invalid request: /);
 });
 
 test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on the plot, adhesion", async () => {
