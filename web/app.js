@@ -79,11 +79,14 @@
     return E.every((e) => e !== null) ? { k, P, P_err: E } : { k, P };
   }
 
+  let loadedTail = null; /* the tail of the spectrum "Use this spectrum" loaded */
   function psdObject() {
     if (document.querySelector('input[name="kind"]:checked').value === "table") {
       const psd = { kind: "table", ...parseTable($("table").value) };
       const q = field("tail");
       if (q !== undefined) psd.tail = { exponent: q };
+      /* a measured spectrum's tail keeps its error while the field holds its exponent */
+      if (loadedTail && q === loadedTail.exponent && loadedTail.exponent_err !== undefined) psd.tail.exponent_err = loadedTail.exponent_err;
       return psd;
     }
     const psd = { kind: "power" };
@@ -755,6 +758,7 @@
     const rows = q.k.map((k, i) => [k, q.P[i], ...(q.P_err ? [q.P_err[i]] : [])].join(", "));
     $("table").value = [`# ${label}`, head, ...rows].join("\n");
     $("tail").value = q.tail ? String(q.tail.exponent) : "";
+    loadedTail = q.tail || null;
     $("units").value = "SI";
     $("do-traction").checked = true;
     $("do-pdf").checked = true;

@@ -311,6 +311,12 @@ test("material and sphere radius: SI values and the contact panel", async () => 
   assert.match(pc, /^pull_off_N\.jkr,[\d.e+-]+,N,[\d.e+-]+$/m);
   assert.match(pc, /^maugis_lambda,/m);
   assert.match(pc, /^regime,\w/m);
+  // SI mode relabels k1 with its minimum from the material (χ = 3ε²E*/(16Δγ) = 3.375e-10 m)
+  await page.selectOption("#units", "SI");
+  assert.match(await page.textContent("#k1-label"), /^k1 \(lower cut-off, 1\/m, > k0\/χ = 1\.392e\+9 1\/m\)$/);
+  assert.match(await page.textContent('#vary option[value="m0"]'), /m0 \(m²\)/);
+  await page.selectOption("#units", "");
+  assert.match(await page.textContent("#k1-label"), /^k̃1 /);
   await page.uncheck("#si-plots");
   assert.match(await runAndWait("#compute"), /^Done: 2 requests/);
   tf = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")));
@@ -509,6 +515,16 @@ test("several measured maps: each one's PSD, their combination with its error ba
   assert.equal(cutPsd.tail, undefined);
   await page.fill("#topo-k1", String(cm.psd.k[0]));
   await page.fill("#topo-k2", "");
+  // issue 30: "Use this spectrum" after a combine: the combined psd object is the calculation's
+  await page.click("#topo-use");
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done|problem|failed/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /^Done: 2 requests/);
+  const used = (await page.evaluate(() => JSON.parse(LJApp.panelJSON("traction")))).requests[0].body;
+  assert.deepEqual(used.psd, cm.psd, "the combined psd object as it is");
+  assert.equal(used.units, "SI");
+  assert.ok((await inked("plot-traction")) > 2000, "traction canvas is blank");
+  await page.check('input[name="kind"][value="power"]');
+  await page.selectOption("#units", "");
   await page.evaluate(() => document.getElementById("card-topo").scrollIntoView());
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-combine.png"), fullPage: false });
   await page.setViewportSize({ width: 390, height: 844 });
