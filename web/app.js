@@ -5,8 +5,11 @@
  * Retry-After). The server is the only validator of values: text that is not a number is sent as
  * it is, and each problem+json error is shown beside the field whose data-ptr names its JSON
  * pointer (longest prefix wins; a pointer no field claims goes to the panel's readout). Each panel
- * keeps its requests, answers and plotted series, which the export buttons write out as CSV, JSON
- * and PNG, or as curl commands that repeat the exact requests.
+ * keeps its requests, answers and plotted series, which the export buttons write out as CSV (the
+ * server's own CSV of the same requests where it has one: units, summary, SI, errors), JSON
+ * (requests, answers, series) and PNG (at 2x, with the parameters), or as curl commands that
+ * repeat the exact requests. A run empties the cards it did not ask for and marks the others
+ * "computed for" their inputs; a problem moves the view and the focus to the first bad field.
  */
 "use strict";
 

@@ -17,6 +17,11 @@
  * with error.P, as `ljgap combine` takes them) go to POST /v1/psd/combine. The plot shows each
  * measurement's bins, the combination with its error band (P ± P_err) and its fit; the
  * combination is what k1, k2 and the adhesion then use, and "Combined PSD as CSV" exports it.
+ *
+ * "Use this spectrum" (issue 30): the psd object between k1 and k2 (one map's or the
+ * combination's, P_err and tail kept) goes with the material into the page's calculation
+ * (LJApp's useSpectrum): traction, PDF and, with a radius, the pull-off, in SI. An empty or
+ * binary file is refused here in one line; a refused map empties the card.
  */
 "use strict";
 

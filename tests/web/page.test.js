@@ -12,10 +12,16 @@
 // (the icon included); no request leaves the local server. Leaves screenshots in
 // $BUILD/web-screenshot*.png.
 // Chromium logs every 4xx answer the page fetches as a console error ("Failed to load
-// resource"), however the page handles it. So the two tests of problems beside their fields take
-// the server's real 422 for the exact request the page builds from the form, fetched here
+// resource"), however the page handles it. So the two older tests of problems beside their fields
+// take the server's real 422 for the exact request the page builds from the form, fetched here
 // outside the browser, and hand it to the page's own display code (LJApp.showProblem,
-// LJJobs.refused): every part of the path runs but the fetch itself, which every 2xx answer runs.
+// LJJobs.refused). Issue 30's test of a bad field lets the page fetch its 422 itself inside
+// expect4xx(), which files that console line as intended; any other console error still fails.
+// Issue 30's flows: a height map through "Use this spectrum" to traction, PDF and pull-off (one
+// map and a combination); a binary file in one line; nothing stale after a preset; a bad field
+// gets the view and the focus; the default simulation starts (202) and is found after a reload;
+// no sideways scrolling at 390 px; the traction CSV is the server's, with units and the summary;
+// the PNG at 2x; SI labels and plots.
 "use strict";
 
 const { test, before, after } = require("node:test");
