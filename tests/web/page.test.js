@@ -674,7 +674,17 @@ test("issue 30: at 390 × 844 the page does not scroll sideways; Compute is on s
   await page.evaluate(() => window.scrollTo(0, 3000));
   const c = await page.evaluate(() => { const b = document.getElementById("compute-top").getBoundingClientRect(); return [b.top, b.bottom]; });
   assert.ok(c[0] >= 0 && c[1] <= 844, `Compute at ${c}`);
-  await page.evaluate(() => window.scrollTo(0, 0));
+  // every visible input named (a label or aria-label); export buttons named by their card
+  const unnamed = await page.evaluate(() => [...document.querySelectorAll("input, select, textarea")]
+    .filter((e) => e.offsetParent !== null && !(e.labels && e.labels.length) && !e.getAttribute("aria-label"))
+    .map((e) => e.id || e.name));
+  assert.deepEqual(unnamed, []);
+  const exportNames = await page.$$eval(".exports button", (b) => b.map((e) => e.textContent));
+  assert.ok(exportNames.every((t) => /^(Traction|PDF|Sweep|PSD|Pull-off|Simulation|Topography) (CSV|JSON|PNG|Copy as curl)$/.test(t)), exportNames.join("|"));
+  // the header's Compute comes first in the focus order (document order, nothing reordered)
+  assert.equal(await page.evaluate(() => [...document.querySelectorAll("a[href], button, input, select, textarea")]
+    .find((e) => e.offsetParent !== null && !e.disabled).id), "compute-top");
+  assert.equal(await page.evaluate(() => document.querySelectorAll("[tabindex]:not([tabindex='-1']):not([tabindex='0'])").length), 0, "no tabindex reorders the page");
   await page.screenshot({ path: path.join(BUILD, "web-screenshot-phone.png"), fullPage: true });
   await page.setViewportSize({ width: 1400, height: 1000 });
 });
