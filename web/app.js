@@ -655,8 +655,10 @@
   function updateExports() {
     for (const box of document.querySelectorAll(".exports")) {
       const p = panels[box.dataset.panel];
-      const has = !!p && (p.series.length > 0 || p.answers.length > 0);
-      for (const b of box.querySelectorAll("button")) b.disabled = !has;
+      /* CSV and PNG need a result; JSON and curl also carry a refused request and its problem */
+      const drawn = !!p && p.series.length > 0;
+      const asked = !!p && (drawn || p.answers.length > 0);
+      for (const b of box.querySelectorAll("button")) b.disabled = /^(csv|png)$/.test(b.dataset.export) ? !drawn : !asked;
     }
   }
 
@@ -729,7 +731,7 @@
         const bad = focusFirstInvalid();
         const cards = [...new Set(reqs.filter((r) => panels[r.panel].failed).map((r) => r.panel))];
         if (!bad) $(`card-${cards[0]}`).scrollIntoView({ block: "start" });
-        setIdle(`${failed} of ${reqs.length} requests answered with a problem: ${bad ? `see the highlighted field${document.querySelectorAll(".invalid").length > 1 ? "s" : ""}` : `see the ${cards.join(", ")} card${cards.length > 1 ? "s" : ""}`}.`, true);
+        setIdle(`${failed} of ${reqs.length} requests answered with a problem: ${bad ? `see the highlighted field${document.querySelectorAll(".invalid").length > 1 ? "s" : ""}` : `see the ${cards.length > 1 ? `${cards.slice(0, -1).join(", ")} and ${cards[cards.length - 1]}` : cards[0]} card${cards.length > 1 ? "s" : ""}`}.`, true);
       } else {
         setIdle(`Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`);
         const first = reqs.length ? $(`card-${reqs[0].panel}`) : null;
@@ -1094,6 +1096,7 @@
     } catch (e) {
       /* the picture waits for a usable form */
     }
+    updateExports();
     probeJobs();
     if (typeof LJTopo !== "undefined") {
       LJTopo.init({

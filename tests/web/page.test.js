@@ -633,6 +633,8 @@ test("issue 30: a bad field puts the view and the focus on it", async () => {
   assert.ok(r[0] > 0 && r[1] < r[2], `k1 at ${r[0]}..${r[1]} of ${r[2]}`);
   assert.match(await page.textContent('.err[data-for="k1"]'), /k0 = 0\.46978/);
   assert.match(await page.textContent("#readout-traction"), /^422 /);
+  assert.equal(await page.isDisabled('[data-panel="traction"] [data-export="csv"]'), true, "no result: no CSV");
+  assert.equal(await page.isDisabled('[data-panel="traction"] [data-export="json"]'), false, "the refused request and its problem");
   // a problem no field claims: "see the traction card", never "highlighted"
   await page.fill("#k1", "1");
   await page.evaluate(() => LJApp.showProblem("traction", 422, { title: "Cap exceeded", detail: "the computation hit its cap", errors: [] }));
