@@ -129,7 +129,7 @@ const LJJobs = (() => {
       const loose = (json.errors || []).map((e) => `${e.pointer}: ${e.detail}`);
       return { text: `${what}: ${r.status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}` };
     }
-    current = { id: json.id, cancelled: false };
+    current = { id: json.id, cancelled: false, what };
     remember({ id: json.id, what, body });
     state(json, what);
     return poll(what);
@@ -207,7 +207,7 @@ const LJJobs = (() => {
     current.cancelled = true;
     const r = await fetch(`/v1/simulations/${current.id}`, { method: "DELETE" });
     const s = await r.json().catch(() => ({}));
-    if (s.id) state(s, "cancelled");
+    if (s.id) state(s, current ? current.what : "numerical"); /* its status says cancelled (or done, when it had ended) */
   }
 
   /* The runs with their error bars' half-widths, beside the theory over the same range. */
@@ -282,7 +282,7 @@ const LJJobs = (() => {
     const m = location.hash.match(/job=([0-9a-f]+)/);
     if (m && (!job || job.id !== m[1])) job = { id: m[1], what: "numerical", body: null };
     if (!job || current) return;
-    current = { id: job.id, cancelled: false };
+    current = { id: job.id, cancelled: false, what: `${job.what} (resumed)` };
     $("sim-start").disabled = true;
     $("sim-cancel").disabled = false;
     $("sim-state").textContent = `job ${job.id.slice(0, 8)}… (from before the reload): asking…`;
