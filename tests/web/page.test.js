@@ -443,6 +443,10 @@ test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on 
   await page.evaluate((p) => LJTopo.refused(422, p), await res.json());
   assert.match(await page.textContent("#status-text"), /refused/);
   assert.match(await page.textContent('.err[data-for="topo-file"]'), /line 2, column 3/);
+  // issue 30: nothing of the good map before stays under the 422 (plot, k1, the adhesion)
+  assert.equal(await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo"))), null);
+  assert.equal(await page.inputValue("#topo-k1"), "");
+  assert.equal(await page.textContent("#readout-topo-adhesion"), "");
   await page.fill("#E_star", "1e9");
 });
 
