@@ -69,6 +69,7 @@
 #include <fftw3.h>
 #include <float.h>
 #include <gsl/gsl_cdf.h>
+#include <gsl/gsl_linalg.h>
 #include <gsl/gsl_sf_bessel.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <gsl/gsl_sf_psi.h>
@@ -1198,6 +1199,7 @@ void ljgap_topo_tab_free(ljgap_topo_tab *t)
     free(t->k);
     free(t->P);
     free(t->P_err);
+    free(t->corr);
     memset(t, 0, sizeof *t);
 }
 
@@ -1212,6 +1214,67 @@ static double tab_int(const double *K, const double *V, size_t m, double x1, dou
         sum += seg_var(K[j], exp(V[j]), s, a, b);
     }
     return sum;
+}
+
+/* The knots' errors: the values solve g_b(V) = ln ∫_b (the table) − ln S_b = 0, so a change
+ * δ ln S of the bins' sums moves the free values by δV = J⁻¹ δ ln S, J_bc = ∂ ln ∫_b / ∂V_c
+ * (numerical, the edge knots tied to their neighbours as in the solve). The bins' relative
+ * errors are independent: cov V = J⁻¹ diag(P_err/P)² J⁻ᵀ. rel[j] receives the knot's relative
+ * error √cov_jj, corr[j] the correlation of knots j and j + 1 (0 for the last). The solve is a
+ * deconvolution of the interpolation's overlap between neighbouring bins, which amplifies
+ * alternating noise: the bins' own relative errors understate the knots' (issue 29). 0, or -1
+ * out of memory. */
+static int tab_errors(const ljgap_topo_result *r, size_t first, const double *K, const double *V0,
+                      size_t mm, size_t idx0, size_t nb, int lead, int trail, double s_end,
+                      const double *blo, const double *bhi, double *rel, double *corr)
+{
+    int st = -1;
+    double *V = malloc(mm * sizeof *V), *g0 = malloc(nb * sizeof *g0);
+    gsl_matrix *J = gsl_matrix_alloc(nb, nb), *X = gsl_matrix_calloc(nb, nb);
+    gsl_permutation *perm = gsl_permutation_alloc(nb);
+    if (!V || !g0 || !J || !X || !perm) goto out;
+    memcpy(V, V0, mm * sizeof *V);
+    for (size_t b = 0; b < nb; b++)
+        g0[b] = log(tab_int(K, V, mm, blo[b], bhi[b]));
+    const double h = 1e-6;
+    for (size_t c = 0; c < nb; c++) {
+        V[idx0 + c] += h;
+        if (lead) V[0] = V[1];
+        if (trail) V[mm - 1] = V[mm - 2] + s_end * log(K[mm - 1] / K[mm - 2]);
+        for (size_t b = 0; b < nb; b++)
+            gsl_matrix_set(J, b, c, (log(tab_int(K, V, mm, blo[b], bhi[b])) - g0[b]) / h);
+        memcpy(V, V0, mm * sizeof *V);
+    }
+    /* X = J⁻¹ diag(rel_b): column b solves J x = rel_b e_b */
+    int sgn;
+    if (gsl_linalg_LU_decomp(J, perm, &sgn)) goto out;
+    for (size_t b = 0; b < nb; b++) {
+        gsl_vector_view col = gsl_matrix_column(X, b);
+        gsl_vector_set(&col.vector, b, r->P_err[first + b] / r->P[first + b]);
+        if (gsl_linalg_LU_svx(J, perm, &col.vector)) goto out;
+    }
+    /* the knot j's row of X (the edge knots: their neighbour's) */
+    for (size_t j = 0; j < mm; j++) {
+        size_t a = j < idx0 ? 0 : j - idx0 >= nb ? nb - 1 : j - idx0;
+        size_t a2 = j + 1 < idx0 ? 0 : j + 1 - idx0 >= nb ? nb - 1 : j + 1 - idx0;
+        double vaa = 0, vbb = 0, vab = 0;
+        for (size_t b = 0; b < nb; b++) {
+            double x = gsl_matrix_get(X, a, b), y = gsl_matrix_get(X, a2, b);
+            vaa += x * x, vbb += y * y, vab += x * y;
+        }
+        rel[j] = sqrt(vaa);
+        corr[j] = j + 1 < mm && vaa > 0 && vbb > 0 ? vab / sqrt(vaa * vbb) : 0;
+        if (!(rel[j] > 0) || !isfinite(rel[j])) /* a singular solve: the bin's own */
+            rel[j] = r->P_err[first + a] / r->P[first + a], corr[j] = 0;
+    }
+    st = 0;
+out:
+    free(V);
+    free(g0);
+    gsl_matrix_free(J);
+    gsl_matrix_free(X);
+    gsl_permutation_free(perm);
+    return st;
 }
 
 #define TOPO_TAB_ITER                                                                              \
@@ -1280,13 +1343,16 @@ int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double tail_q, l
     t->k = malloc(mm * sizeof *t->k);
     t->P = malloc(mm * sizeof *t->P);
     t->P_err = malloc(mm * sizeof *t->P_err);
-    if (!t->k || !t->P || !t->P_err) goto end;
+    t->corr = calloc(mm, sizeof *t->corr);
+    if (!t->k || !t->P || !t->P_err || !t->corr) goto end;
     for (size_t j = 0; j < mm; j++) {
-        size_t b = j < idx0 ? 0 : j - idx0 >= nb ? nb - 1 : j - idx0, i = first + b;
         t->k[j] = K[j];
         t->P[j] = exp(V[j]);
-        t->P_err[j] = t->P[j] * r->P_err[i] / r->P[i];
     }
+    if (tab_errors(r, first, K, V, mm, idx0, nb, lead, trail, s_end, blo, bhi, t->P_err, t->corr))
+        goto end;
+    for (size_t j = 0; j < mm; j++)
+        t->P_err[j] *= t->P[j];
     t->n = mm;
     t->m0 = tab_int(K, V, mm, K[0], K[mm - 1]);
     t->m0_modes = 0;

@@ -121,7 +121,9 @@ typedef struct {
 /* The psd object's table (ljgap_topo_table). */
 typedef struct {
     size_t n;
-    double *k, *P, *P_err; /* owned, n each */
+    double *k, *P, *P_err; /* owned, n each; P_err propagated through the solve (below) */
+    double *corr;          /* owned, n: correlation of the errors of knots j and j + 1 (the
+                            * solve makes neighbours anticorrelated); corr[n - 1] = 0 */
     double m0;             /* 2π ∫ k P dk of the table's log-log interpolation (no tail) */
     double m0_modes;       /* the variance of the modes the table stands for (Σ of var[]) */
 } ljgap_topo_tab;
