@@ -94,6 +94,8 @@ typedef struct {
     double *var;   /* owned: the variance the bin's modes carry, Σ P Δq² (a profile: its 2-D
                     * equivalent 2π ∫ k P dk of the converted bin over [lo, hi]) */
     double *slope; /* owned: the local slope d ln P / d ln k the bin's curvature correction used */
+    double *rho;   /* owned: the correlation of the bin's P with the next bin's (a windowed map's
+                    * neighbouring modes are correlated; 0 unwindowed); the fit's errors use it */
     /* profiles only (NULL for a map): the 1-D PSD PP the bins were converted from */
     double *PP;      /* owned: mean two-sided 1-D periodogram of the bin */
     double *PP_err;  /* owned: its standard error */
