@@ -621,6 +621,7 @@ static int fit_power(const double *k, const double *P, const double *modes, cons
     f->bins = m;
     f->chi2_red = chi2_red;
     f->noise_floor = 0;
+    f->noise_floor_err = 0;
     return 0;
 }
 
@@ -730,6 +731,35 @@ static int fit_minus(const double *k, const double *P, const double *modes, cons
     return fit_power(k, Pw, mw, rho, var_extra, n, 0, INFINITY, f);
 }
 
+/* The floor's error from its χ² profile on the grid (N[i], chi[i], increasing N): the interval
+ * where χ² ≤ χ²_min + s (s = max(χ²_red, 1): the errors scaled for misfit as the fit's), its
+ * ends interpolated linearly between grid points; half its width. An end beyond the grid: the
+ * other half-width (a floor's upper end unbounded on the grid: its distance to the grid's end). */
+static double floor_err(const double *N, const double *chi, int n, double chimin, double s)
+{
+    int b = 0;
+    for (int i = 0; i < n; i++)
+        if (chi[i] < chi[b]) b = i;
+    double lim = chimin + s, lo = NAN, hi = NAN;
+    for (int i = b; i > 0; i--)
+        if (isfinite(chi[i - 1]) && chi[i - 1] > lim) {
+            lo = N[i - 1] + (N[i] - N[i - 1]) * (chi[i - 1] - lim) / (chi[i - 1] - chi[i]);
+            break;
+        }
+    for (int i = b; i + 1 < n; i++)
+        if (!isfinite(chi[i + 1]) || chi[i + 1] > lim) {
+            hi = isfinite(chi[i + 1])
+                     ? N[i] + (N[i + 1] - N[i]) * (lim - chi[i]) / (chi[i + 1] - chi[i])
+                     : N[i + 1];
+            break;
+        }
+    double e = isfinite(lo) && isfinite(hi) ? (hi - lo) / 2
+               : isfinite(lo)               ? N[b] - lo
+               : isfinite(hi)               ? hi - N[b]
+                                            : N[b];
+    return fmax(e, 0);
+}
+
 /* A white-noise floor above the band starting at bin a: N profiled on a grid (0 and Pmin
  * 10^(-3 + j/20), j < 60, Pmin the least P over [a, hi]), the law fitted to ln(P - N) over
  * [a, hi] at each. The floor is kept when it lowers χ² significantly (F(1, n - 3) at
@@ -743,7 +773,7 @@ static int fit_floor(const double *k, const double *P, const double *modes, cons
     size_t n = hi - a + 1;
     if (n < 6) return 0;
     double *Pw = malloc(2 * n * sizeof *Pw), Pmin = INFINITY, chi0 = INFINITY, chib = INFINITY,
-           Nb = 0;
+           Nb = 0, Ng[61], cg[61];
     if (!Pw) return -1;
     double *mw = Pw + n;
     ljgap_topo_fit g;
@@ -751,10 +781,12 @@ static int fit_floor(const double *k, const double *P, const double *modes, cons
         Pmin = fmin(Pmin, P[i]);
     for (int j = -1; j < 60; j++) {
         double N = j < 0 ? 0 : Pmin * pow(10, -3 + j / 20.0);
+        Ng[j + 1] = N, cg[j + 1] = INFINITY;
         if (fit_minus(k + a, P + a, modes + a, rho ? rho + TOPO_LAGS * a : NULL, var_extra, n, N,
                       Pw, mw, &g))
             continue;
         double chi = g.chi2_red * ((double)g.bins - 2);
+        cg[j + 1] = chi;
         if (j < 0) chi0 = chi;
         if (chi < chib) chib = chi, Nb = N;
     }
@@ -770,6 +802,7 @@ static int fit_floor(const double *k, const double *P, const double *modes, cons
                                      var_extra, b - a + 1, Nb, Pw, mw, &g)) {
             *f = g;
             f->noise_floor = Nb;
+            f->noise_floor_err = floor_err(Ng, cg, 61, chib, fmax(chib / dof, 1));
             found = 1;
         }
     }
@@ -1219,6 +1252,14 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
                        ? "the spectrum is no power law in any band of the reliable data"
                        : "the fitted fractal dimension lies outside (2, 3)",
                    res->fit.D.value, res->fit.chi2_red, res->fit.kmin, res->fit.kmax);
+    if (res->has_fit && res->fit.noise_floor > 0) {
+        /* the floor ends the reliable band: above the fit band the bins are mostly noise */
+        size_t e = res->rel_first;
+        while (e + 1 <= res->rel_last && res->k[e + 1] <= res->fit.kmax * (1 + 1e-9))
+            e++;
+        if (res->hi[e] < res->rel_kmax)
+            res->rel_kmax = res->hi[e], res->rel_last = e, res->rel_by = LJGAP_RELIABLE_NOISE;
+    }
     if (res->has_fit && res->fit.noise_floor > 0)
         ljgap_warn(w,
                    "topography: a white-noise floor (P = %.3g) lies above the power law: the "

@@ -50,7 +50,9 @@ typedef enum {
 typedef enum {
     LJGAP_RELIABLE_NYQUIST = 0,
     LJGAP_RELIABLE_TIP,
-    LJGAP_RELIABLE_RESOLUTION
+    LJGAP_RELIABLE_RESOLUTION,
+    LJGAP_RELIABLE_NOISE /* a white-noise floor: the band ends with the fit's (the floor at 20 %
+                          * of the law) */
 } ljgap_topo_by;
 
 typedef struct {
@@ -80,6 +82,7 @@ typedef struct {
                          * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
     double noise_floor; /* a white floor N (unit⁴) found above the band, P = C k^(2D-8) + N
                          * fitted with it (core/topo.c: fit_floor); 0: none */
+    double noise_floor_err; /* its standard error (the χ² profile's Δχ² = max(χ²_red, 1)) */
 } ljgap_topo_fit;
 
 typedef struct {

@@ -657,6 +657,36 @@ static void real_noise_floor(void **state)
     }
 }
 
+/* The floor's value and error, and the reliable band it ends: 20 periodic 256² maps of D 2.5
+ * with the floor equal to the law at 100 k_f: the floor found in every map, reliable.by noise
+ * (the band's end the fit band's upper edge), N within its errors of the true σ² dx²/(2π)²:
+ * rms of (N − N_true)/N_err within 0.5–2 and the spread of N over its rms error too. */
+static void real_noise_floor_error(void **state)
+{
+    realsurf_spec s = real_spec(256, 2.5, 2, 0);
+    double kf = 2 * M_PI / (256 * DX), *h = map_alloc(256 * 256), z2 = 0, m = 0, m2 = 0, e2 = 0;
+    s.noise = sqrt(realsurf_P(&s, 100 * kf)) * 2 * M_PI / DX;
+    const double Nt = s.noise * s.noise * DX * DX / (4 * M_PI * M_PI);
+    const int R = 20;
+    for (int t = 0; t < R; t++) {
+        ljgap_topo_result r;
+        assert_int_equal(realsurf_make(h, 256, 256, DX, DX, &s, 3000 + (unsigned long)t, NULL), 0);
+        compute(h, 256, 256, DX, 1, &r);
+        assert_true(r.has_fit && r.fit.noise_floor > 0 && r.fit.noise_floor_err > 0);
+        assert_int_equal(r.rel_by, LJGAP_RELIABLE_NOISE);
+        assert_true(r.k[r.rel_last] <= r.fit.kmax * (1 + 1e-9) && r.rel_kmax == r.hi[r.rel_last]);
+        double N = r.fit.noise_floor, e = r.fit.noise_floor_err;
+        z2 += pow((N - Nt) / e, 2), m += N / R, m2 += N * N / R, e2 += e * e / R;
+        ljgap_topo_result_free(&r);
+    }
+    double z = sqrt(z2 / R), sp = sqrt((m2 - m * m) * R / (R - 1) / e2);
+    printf("# noise floor, %d maps: mean N / N_true %.3f, rms (N - N_true)/N_err %.2f, spread / "
+           "error %.2f (relative error %.3f)\n",
+           R, m / Nt, z, sp, sqrt(e2) / m);
+    assert_true(z > 0.5 && z < 2 && sp > 0.5 && sp < 2);
+    free(h);
+}
+
 /* A tilted non-periodic crop (plane removed, Hann window): D within 0.07. */
 static void real_tilted_crop(void **state)
 {
@@ -1006,6 +1036,7 @@ int main(void)
         cmocka_unit_test(band_limited_128),
         cmocka_unit_test(real_rolloff_cutoff),
         cmocka_unit_test(real_noise_floor),
+        cmocka_unit_test(real_noise_floor_error),
         cmocka_unit_test(real_tilted_crop),
         cmocka_unit_test(real_scan_lines),
         cmocka_unit_test(real_tip),
