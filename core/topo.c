@@ -261,8 +261,8 @@ static void window(double *a, size_t nx, size_t ny)
 
 #define TOPO_NO_BIN UINT16_MAX
 /* a windowed map's bins correlate with the next TOPO_LAGS bins (the window's ±2 modes reach
- * further over narrow low bins, but 3 lags changed the errors of D by 0.1 % and cost a third of
- * the core's time on a 2048² map) */
+ * further over narrow low bins, but 3 lags changed the errors of D by 0.1 % and looked to slow
+ * the core on a 2048² map by up to a third, measured at load 7: noisy) */
 #define TOPO_LAGS 1
 
 /* Sums per logarithmic bin while the modes are visited. */
