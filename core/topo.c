@@ -69,6 +69,7 @@
 #include <fftw3.h>
 #include <float.h>
 #include <gsl/gsl_cdf.h>
+#include <gsl/gsl_linalg.h>
 #include <gsl/gsl_sf_bessel.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <gsl/gsl_sf_psi.h>
@@ -110,6 +111,7 @@ void ljgap_topo_result_free(ljgap_topo_result *res)
     free(res->hi);
     free(res->var);
     free(res->slope);
+    free(res->rho);
     free(res->PP);
     free(res->PP_err);
     memset(res, 0, sizeof *res);
@@ -258,20 +260,25 @@ static void window(double *a, size_t nx, size_t ny)
 /* ---- bins ---- */
 
 #define TOPO_NO_BIN UINT16_MAX
+/* a windowed map's bins correlate with the next TOPO_LAGS bins (the window's ±2 modes reach
+ * further over narrow low bins, but 3 lags changed the errors of D by 0.1 % and looked to slow
+ * the core on a 2048² map by up to a third, measured at load 7: noisy) */
+#define TOPO_LAGS 1
 
 /* Sums per logarithmic bin while the modes are visited. */
 typedef struct {
-    size_t nb;   /* bins allocated (< TOPO_NO_BIN) */
-    double kf;   /* fundamental: the bins' origin */
-    double knyq; /* last |q| binned */
-    double B;    /* bins per decade */
-    double *cnt; /* modes (full plane or full line) */
-    double *sl;  /* Σ ln(|q|/kf), Σ ln², Σ ln³: 3 a bin */
-    double *sP;  /* Σ periodogram */
-    double *cor; /* windowed: Σ over the bin's modes of the in-bin correlation sum (see
-                  * bin_correlations); NULL unwindowed (each mode correlates with itself only) */
-    double cell; /* the lattice's cell: Δqx Δqy (a map) or Δk (a profile) */
-    int line;    /* 1: a profile (cells along a line) */
+    size_t nb;    /* bins allocated (< TOPO_NO_BIN) */
+    double kf;    /* fundamental: the bins' origin */
+    double knyq;  /* last |q| binned */
+    double B;     /* bins per decade */
+    double *cnt;  /* modes (full plane or full line) */
+    double *sl;   /* Σ ln(|q|/kf), Σ ln², Σ ln³: 3 a bin */
+    double *sP;   /* Σ periodogram */
+    double *cor;  /* windowed: Σ over the bin's modes of the in-bin correlation sum (see
+                   * bin_correlations); NULL unwindowed (each mode correlates with itself only) */
+    double *xcor; /* windowed: the same over the next bin's modes (the bins' covariance) */
+    double cell;  /* the lattice's cell: Δqx Δqy (a map) or Δk (a profile) */
+    int line;     /* 1: a profile (cells along a line) */
 } binner;
 
 static int binner_alloc(binner *b, double kf, double knyq, double B, int windowed)
@@ -284,8 +291,10 @@ static int binner_alloc(binner *b, double kf, double knyq, double B, int windowe
     b->sl = calloc(3 * b->nb, sizeof(double));
     b->sP = calloc(b->nb, sizeof(double));
     b->cor = windowed ? calloc(b->nb, sizeof(double)) : NULL;
-    return b->cnt && b->sl && b->sP && (b->cor || !windowed) && b->nb < TOPO_NO_BIN ? LJGAP_OK
-                                                                                    : LJGAP_ENOMEM;
+    b->xcor = windowed ? calloc(TOPO_LAGS * b->nb, sizeof(double)) : NULL;
+    return b->cnt && b->sl && b->sP && ((b->cor && b->xcor) || !windowed) && b->nb < TOPO_NO_BIN
+               ? LJGAP_OK
+               : LJGAP_ENOMEM;
 }
 
 static void binner_free(binner *b)
@@ -294,6 +303,7 @@ static void binner_free(binner *b)
     free(b->sl);
     free(b->sP);
     free(b->cor);
+    free(b->xcor);
 }
 
 /* The bin of |q| (TOPO_NO_BIN beyond k_nyq); x = ln(q/kf). */
@@ -336,12 +346,20 @@ static void bin_correlations_map(binner *b, const uint16_t *bi, size_t nx, size_
         for (size_t i = 0; i < nxc; i++) {
             uint16_t me = bi[j * nxc + i];
             if (me == TOPO_NO_BIN) continue;
-            double sum = 0, mult = (i == 0 || 2 * i == nx) ? 1 : 2;
+            /* acc[0]: the same bin, acc[l]: l bins on (TOPO_NO_BIN and lower bins wrap to a
+             * large unsigned lag and land in acc[TOPO_LAGS + 1], discarded) */
+            double acc[TOPO_LAGS + 2] = {0}, *xs = acc + 1;
+            double mult = (i == 0 || 2 * i == nx) ? 1 : 2;
             if (j >= 2 && j + 2 < ny && i >= 2 && i + 2 < nxc) { /* inside: no wrapping */
                 const uint16_t *r = bi + (j - 2) * nxc + (i - 2);
+                double s0 = 0, s1 = 0; /* lags 0 and 1 (TOPO_LAGS): branch-free */
+                const uint16_t me1 = (uint16_t)(me + 1);
                 for (int c = 0; c < 5; c++, r += nxc)
-                    for (int a = 0; a < 5; a++)
-                        sum += r[a] == me ? w[c][a] : 0;
+                    for (int a = 0; a < 5; a++) {
+                        s0 += r[a] == me ? w[c][a] : 0;
+                        s1 += r[a] == me1 ? w[c][a] : 0;
+                    }
+                acc[0] = s0, acc[1] = s1;
             } else {
                 for (long c = -2; c <= 2; c++)
                     for (long a = -2; a <= 2; a++) {
@@ -351,10 +369,13 @@ static void bin_correlations_map(binner *b, const uint16_t *bi, size_t nx, size_
                             jj = -jj;
                         }
                         jj = ((jj % (long)ny) + (long)ny) % (long)ny;
-                        if (bi[(size_t)jj * nxc + (size_t)ii] == me) sum += w[c + 2][a + 2];
+                        unsigned l = (uint16_t)(bi[(size_t)jj * nxc + (size_t)ii] - me);
+                        acc[l <= TOPO_LAGS ? l : TOPO_LAGS + 1] += w[c + 2][a + 2];
                     }
             }
-            b->cor[me] += mult * sum;
+            b->cor[me] += mult * acc[0];
+            for (int l = 0; l < TOPO_LAGS; l++)
+                b->xcor[TOPO_LAGS * me + l] += mult * xs[l];
         }
 }
 
@@ -365,14 +386,18 @@ static void bin_correlations_line(binner *b, const uint16_t *bi, size_t n)
     for (size_t i = 1; i < nc; i++) {
         uint16_t me = bi[i];
         if (me == TOPO_NO_BIN) continue;
-        double sum = 0, mult = 2 * i == n ? 1 : 2;
+        double sum = 0, xs[TOPO_LAGS] = {0}, mult = 2 * i == n ? 1 : 2;
         for (long a = -2; a <= 2; a++) {
             long ii = (long)i + a;
             if (ii < 0) ii = -ii;
             if (ii > (long)n / 2) ii = (long)n - ii;
             if (ii > 0 && bi[ii] == me) sum += hann_rho2[labs(a)];
+            if (ii > 0 && bi[ii] > me && bi[ii] <= me + TOPO_LAGS && bi[ii] != TOPO_NO_BIN)
+                xs[bi[ii] - me - 1] += hann_rho2[labs(a)];
         }
         b->cor[me] += mult * sum;
+        for (int l = 0; l < TOPO_LAGS; l++)
+            b->xcor[TOPO_LAGS * me + l] += mult * xs[l];
     }
 }
 
@@ -384,6 +409,7 @@ typedef struct {
     double *kap;           /* 2 a bin: the variance and third cumulant of ln |q| over the modes */
     double *lo, *hi;       /* the band the bin's modes cover (see binner_out) */
     double *var;           /* Σ P × cell over the bin's modes */
+    double *rho;           /* the correlation of the bin's mean with the next bin's (window) */
 } bins;
 
 static void bins_free(bins *o)
@@ -396,6 +422,7 @@ static void bins_free(bins *o)
     free(o->lo);
     free(o->hi);
     free(o->var);
+    free(o->rho);
     memset(o, 0, sizeof *o);
 }
 
@@ -427,7 +454,9 @@ static int binner_out(const binner *b, bins *o)
     o->lo = malloc(mm * sizeof *o->lo);
     o->hi = malloc(mm * sizeof *o->hi);
     o->var = malloc(mm * sizeof *o->var);
-    if (!o->k || !o->P || !o->P_err || !o->modes || !o->kap || !o->lo || !o->hi || !o->var)
+    o->rho = calloc(TOPO_LAGS * mm, sizeof *o->rho);
+    if (!o->k || !o->P || !o->P_err || !o->modes || !o->kap || !o->lo || !o->hi || !o->var ||
+        !o->rho)
         return LJGAP_ENOMEM;
     double cells = 1; /* the zero mode */
     for (size_t i = 0; i < b->nb; i++) {
@@ -446,6 +475,12 @@ static int binner_out(const binner *b, bins *o)
         cells += c;
         o->hi[o->n] = cells_edge(b, cells);
         o->var[o->n] = b->sP[i] * b->cell;
+        /* Cov(P̄_b, P̄_b+1) = P_b P_b+1 Σ_{i∈b, j∈b+1} ρ²_ij / (cnt_b cnt_b+1) / 2 × 2 */
+        for (size_t l = 1; b->xcor && l <= TOPO_LAGS && i + l < b->nb; l++) {
+            if (!(b->cnt[i + l] > 0 && b->cor[i] > 0 && b->cor[i + l] > 0)) break;
+            o->rho[TOPO_LAGS * o->n + l - 1] =
+                fmin(b->xcor[TOPO_LAGS * i + l - 1] / sqrt(b->cor[i] * b->cor[i + l]), 0.99);
+        }
         /* the bin's k inside its band (the lattice's first rings are coarse) */
         o->lo[o->n] = fmin(o->lo[o->n], o->k[o->n]);
         o->hi[o->n] = fmax(o->hi[o->n], o->k[o->n]);
@@ -525,8 +560,13 @@ static void bins_correct(const bins *o, const double *s, double *P, double *P_er
  * weight 1/(ψ'(N) + var_extra) (var_extra: a variance common to every bin, the profile
  * conversion's): without that shift the few-mode bins at low k sit low by up to γ = 0.58 in
  * ln P and tilt the slope. f filled and 0, or -1 when fewer than 3 usable bins. */
-static int fit_power(const double *k, const double *P, const double *modes, double var_extra,
-                     size_t n, double kmin, double kmax, ljgap_topo_fit *f)
+static int fit_uses(double k, double P, double modes, double kmin, double kmax)
+{
+    return !(k < kmin * (1 - 1e-9) || k > kmax * (1 + 1e-9) || !(P > 0) || !(modes > 0));
+}
+
+static int fit_power(const double *k, const double *P, const double *modes, const double *rho,
+                     double var_extra, size_t n, double kmin, double kmax, ljgap_topo_fit *f)
 {
     double S = 0, Sx = 0, Sy = 0, Sxx = 0, Sxy = 0, chi2 = 0, klo = INFINITY, khi = 0;
     size_t m = 0;
@@ -556,6 +596,24 @@ static int fit_power(const double *k, const double *P, const double *modes, doub
     double xm = Sx / S, ym = Sy / S, slope = Sxy / Sxx;
     double chi2_red = chi2 / (double)(m - 2), scale = chi2_red > 1 ? chi2_red : 1;
     double var_s = scale / Sxx, var_y = scale / S;
+    if (rho) { /* a windowed map's neighbouring bins share modes: the estimates' sandwich
+                * variance, Var = Σ_ij c_i c_j Cov_ij with Cov_ij = ρ_ij σ_i σ_j */
+        double ts = 0, ty = 0;
+        for (size_t i = 0; i < n; i++)
+            for (size_t l = 1; l <= TOPO_LAGS && i + l < n; l++) {
+                size_t j = i + l;
+                double r = rho[TOPO_LAGS * i + l - 1];
+                if (!(r > 0) || !fit_uses(k[i], P[i], modes[i], kmin, kmax) ||
+                    !fit_uses(k[j], P[j], modes[j], kmin, kmax))
+                    continue;
+                double w0 = 1 / (gsl_sf_psi_1(modes[i]) + var_extra);
+                double w1 = 1 / (gsl_sf_psi_1(modes[j]) + var_extra), sw = sqrt(w0 * w1);
+                ts += 2 * r * sw * (log(k[i]) - xm) * (log(k[j]) - xm);
+                ty += 2 * r * sw;
+            }
+        var_s *= fmax(1 + ts / Sxx, 1);
+        var_y *= fmax(1 + ty / S, 1);
+    }
     double lnC = ym - slope * xm, var_lnC = var_y + xm * xm * var_s;
     f->D.value = 0.5 * (slope + 8);
     f->D.err = 0.5 * sqrt(var_s);
@@ -567,6 +625,7 @@ static int fit_power(const double *k, const double *P, const double *modes, doub
     f->bins = m;
     f->chi2_red = chi2_red;
     f->noise_floor = 0;
+    f->noise_floor_err = 0;
     return 0;
 }
 
@@ -621,13 +680,16 @@ static int fit_curvature(const double *k, const double *P, const double *modes, 
  * normalised statistics (χ²'s excess in its standard deviations, the curvature's and the ends'
  * slope differences in their standard errors), *ok whether all lie within Z and the window
  * falls faster than k^-1. */
-static int window_fit(const double *k, const double *P, const double *modes, double var_extra,
-                      size_t a, size_t b, double Z, ljgap_topo_fit *f, int *ok, double *z)
+static int window_fit(const double *k, const double *P, const double *modes, const double *rho,
+                      double var_extra, size_t a, size_t b, double Z, ljgap_topo_fit *f, int *ok,
+                      double *z)
 {
     double c, sc;
     *ok = 0;
     *z = INFINITY;
-    if (fit_power(k + a, P + a, modes + a, var_extra, b - a + 1, 0, INFINITY, f)) return -1;
+    if (fit_power(k + a, P + a, modes + a, rho ? rho + TOPO_LAGS * a : NULL, var_extra, b - a + 1,
+                  0, INFINITY, f))
+        return -1;
     double dof = (double)f->bins - 2;
     double zmax = (f->chi2_red - 1) / sqrt(2 / dof);
     if (fit_curvature(k + a, P + a, modes + a, var_extra, b - a + 1, &c, &sc) == 0)
@@ -642,7 +704,9 @@ static int window_fit(const double *k, const double *P, const double *modes, dou
         size_t u = end ? y : x, v = end ? x : y;
         ljgap_topo_fit g;
         if (v < u + 2 || v - u + 1 >= f->bins) continue;
-        if (fit_power(k + u, P + u, modes + u, var_extra, v - u + 1, 0, INFINITY, &g)) continue;
+        if (fit_power(k + u, P + u, modes + u, rho ? rho + TOPO_LAGS * u : NULL, var_extra,
+                      v - u + 1, 0, INFINITY, &g))
+            continue;
         zmax = fmax(zmax, fabs(g.D.value - f->D.value) / hypot(g.D.err, f->D.err));
     }
     if (!(zmax == zmax)) zmax = INFINITY;
@@ -659,15 +723,45 @@ static int window_fit(const double *k, const double *P, const double *modes, dou
 /* The power law with a white floor, P = C k^s + N, over the bins [0, n) for a given N: the
  * weighted fit of ln(P - N) (fit_power on P - N with the modes m (1 - N/P)², the relative
  * variance of P - N being the bin's times (P/(P - N))²). -1 when a bin lies at or below N. */
-static int fit_minus(const double *k, const double *P, const double *modes, double var_extra,
-                     size_t n, double N, double *Pw, double *mw, ljgap_topo_fit *f)
+static int fit_minus(const double *k, const double *P, const double *modes, const double *rho,
+                     double var_extra, size_t n, double N, double *Pw, double *mw,
+                     ljgap_topo_fit *f)
 {
     for (size_t i = 0; i < n; i++) {
         double r = 1 - N / P[i];
         if (!(r > 0)) return -1;
         Pw[i] = P[i] - N, mw[i] = modes[i] * r * r;
     }
-    return fit_power(k, Pw, mw, var_extra, n, 0, INFINITY, f);
+    return fit_power(k, Pw, mw, rho, var_extra, n, 0, INFINITY, f);
+}
+
+/* The floor's error from its χ² profile on the grid (N[i], chi[i], increasing N): the interval
+ * where χ² ≤ χ²_min + s (s = max(χ²_red, 1): the errors scaled for misfit as the fit's), its
+ * ends interpolated linearly between grid points; half its width. An end beyond the grid: the
+ * other half-width (a floor's upper end unbounded on the grid: its distance to the grid's end). */
+static double floor_err(const double *N, const double *chi, int n, double chimin, double s)
+{
+    int b = 0;
+    for (int i = 0; i < n; i++)
+        if (chi[i] < chi[b]) b = i;
+    double lim = chimin + s, lo = NAN, hi = NAN;
+    for (int i = b; i > 0; i--)
+        if (isfinite(chi[i - 1]) && chi[i - 1] > lim) {
+            lo = N[i - 1] + (N[i] - N[i - 1]) * (chi[i - 1] - lim) / (chi[i - 1] - chi[i]);
+            break;
+        }
+    for (int i = b; i + 1 < n; i++)
+        if (!isfinite(chi[i + 1]) || chi[i + 1] > lim) {
+            hi = isfinite(chi[i + 1])
+                     ? N[i] + (N[i + 1] - N[i]) * (lim - chi[i]) / (chi[i + 1] - chi[i])
+                     : N[i + 1];
+            break;
+        }
+    double e = isfinite(lo) && isfinite(hi) ? (hi - lo) / 2
+               : isfinite(lo)               ? N[b] - lo
+               : isfinite(hi)               ? hi - N[b]
+                                            : N[b];
+    return fmax(e, 0);
 }
 
 /* A white-noise floor above the band starting at bin a: N profiled on a grid (0 and Pmin
@@ -677,13 +771,13 @@ static int fit_minus(const double *k, const double *P, const double *modes, doub
  * the law + floor is itself acceptable over [a, hi] (χ²_red within 1 + Z √(2/dof)); the band
  * then ends where N reaches TOPO_FLOOR_END of the law and the fit is the law's with N
  * subtracted. 1 and f set when a floor is found, 0 otherwise, -1 out of memory. */
-static int fit_floor(const double *k, const double *P, const double *modes, double var_extra,
-                     size_t a, size_t hi, double Z, ljgap_topo_fit *f)
+static int fit_floor(const double *k, const double *P, const double *modes, const double *rho,
+                     double var_extra, size_t a, size_t hi, double Z, ljgap_topo_fit *f)
 {
     size_t n = hi - a + 1;
     if (n < 6) return 0;
     double *Pw = malloc(2 * n * sizeof *Pw), Pmin = INFINITY, chi0 = INFINITY, chib = INFINITY,
-           Nb = 0;
+           Nb = 0, Ng[61], cg[61];
     if (!Pw) return -1;
     double *mw = Pw + n;
     ljgap_topo_fit g;
@@ -691,8 +785,12 @@ static int fit_floor(const double *k, const double *P, const double *modes, doub
         Pmin = fmin(Pmin, P[i]);
     for (int j = -1; j < 60; j++) {
         double N = j < 0 ? 0 : Pmin * pow(10, -3 + j / 20.0);
-        if (fit_minus(k + a, P + a, modes + a, var_extra, n, N, Pw, mw, &g)) continue;
+        Ng[j + 1] = N, cg[j + 1] = INFINITY;
+        if (fit_minus(k + a, P + a, modes + a, rho ? rho + TOPO_LAGS * a : NULL, var_extra, n, N,
+                      Pw, mw, &g))
+            continue;
         double chi = g.chi2_red * ((double)g.bins - 2);
+        cg[j + 1] = chi;
         if (j < 0) chi0 = chi;
         if (chi < chib) chib = chi, Nb = N;
     }
@@ -704,10 +802,11 @@ static int fit_floor(const double *k, const double *P, const double *modes, doub
         size_t b = a;
         for (size_t i = a; i <= hi; i++)
             if (Nb <= TOPO_FLOOR_END * (P[i] - Nb)) b = i;
-        if (b >= a + 2 &&
-            !fit_minus(k + a, P + a, modes + a, var_extra, b - a + 1, Nb, Pw, mw, &g)) {
+        if (b >= a + 2 && !fit_minus(k + a, P + a, modes + a, rho ? rho + TOPO_LAGS * a : NULL,
+                                     var_extra, b - a + 1, Nb, Pw, mw, &g)) {
             *f = g;
             f->noise_floor = Nb;
+            f->noise_floor_err = floor_err(Ng, cg, 61, chib, fmax(chib / dof, 1));
             found = 1;
         }
     }
@@ -724,8 +823,9 @@ static int fit_floor(const double *k, const double *P, const double *modes, doub
  * slower than k^-6 (TOPO_BAND_STEEP: no cutoff), the one whose largest normalised statistic is
  * least, not sound; none of those: the fit over [lo, hi], not sound. f filled and 0, or -1
  * when [lo, hi] holds fewer than 3 bins. */
-static int fit_band(const double *k, const double *P, const double *modes, double var_extra,
-                    size_t lo, size_t hi, int fix_lo, int fix_hi, ljgap_topo_fit *f)
+static int fit_band(const double *k, const double *P, const double *modes, const double *rho,
+                    double var_extra, size_t lo, size_t hi, int fix_lo, int fix_hi,
+                    ljgap_topo_fit *f)
 {
     ljgap_topo_fit t, best = {0}, any = {0};
     double z, zany = INFINITY, ZM = INFINITY;
@@ -743,7 +843,7 @@ static int fit_band(const double *k, const double *P, const double *modes, doubl
                     M++;
                     continue;
                 }
-                if (window_fit(k, P, modes, var_extra, a, b, ZM, &t, &ok, &z)) continue;
+                if (window_fit(k, P, modes, rho, var_extra, a, b, ZM, &t, &ok, &z)) continue;
                 if (ok && (!found || t.D.err < best.D.err)) best = t, found = 1;
                 double s = 2 * t.D.value - 8;
                 if (s < TOPO_BAND_SLOPE && s > TOPO_BAND_STEEP && z < zany)
@@ -758,12 +858,13 @@ static int fit_band(const double *k, const double *P, const double *modes, doubl
         size_t a = lo;
         while (a < hi && k[a] < f->kmin * (1 - 1e-9))
             a++;
-        if (!fix_hi && found && fit_floor(k, P, modes, var_extra, a, hi, ZM, &g) == 1) {
+        if (!fix_hi && found && fit_floor(k, P, modes, rho, var_extra, a, hi, ZM, &g) == 1) {
             g.sound = g.D.value > 2 && g.D.value < 3;
             *f = g;
         }
     } else {
-        if (fit_power(k + lo, P + lo, modes + lo, var_extra, hi - lo + 1, 0, INFINITY, f))
+        if (fit_power(k + lo, P + lo, modes + lo, rho ? rho + TOPO_LAGS * lo : NULL, var_extra,
+                      hi - lo + 1, 0, INFINITY, f))
             return -1;
         f->sound = 0;
     }
@@ -917,7 +1018,7 @@ static int profile_convert(ljgap_topo_result *r, size_t lo, size_t hi, int fix_l
                            ljgap_warnings *w)
 {
     ljgap_topo_fit f1;
-    if (fit_band(r->k, r->PP, r->modes, 0, lo, hi, fix_lo, fix_hi, &f1) != 0) {
+    if (fit_band(r->k, r->PP, r->modes, r->rho, 0, lo, hi, fix_lo, fix_hi, &f1) != 0) {
         ljgap_warn(w,
                    "topography: the profile has fewer than 3 bins in the band [%g, %g] to "
                    "fit the exponent that converts it to the isotropic PSD",
@@ -1011,7 +1112,7 @@ static int fit_spectrum(ljgap_topo_result *r, const ljgap_topo_opts *o, double v
     }
     if (r->n == 0 || lo >= r->n || hi < lo + 2) return -1;
     if (profile_pp) return profile_convert(r, lo, hi, fix_lo, fix_hi, w) ? -2 : 0;
-    return fit_band(r->k, P, r->modes, var_extra, lo, hi, fix_lo, fix_hi, &r->fit);
+    return fit_band(r->k, P, r->modes, r->rho, var_extra, lo, hi, fix_lo, fix_hi, &r->fit);
 }
 
 int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_topo_opts *o,
@@ -1102,7 +1203,8 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
     res->n = o1.n;
     /* the result owns them now */
     res->k = o1.k, res->modes = o1.modes, res->lo = o1.lo, res->hi = o1.hi, res->var = o1.var;
-    o1.k = o1.modes = o1.lo = o1.hi = o1.var = NULL;
+    res->rho = o1.rho;
+    o1.k = o1.modes = o1.lo = o1.hi = o1.var = o1.rho = NULL;
     size_t nn = res->n ? res->n : 1;
     res->P = malloc(nn * sizeof *res->P);
     res->P_err = malloc(nn * sizeof *res->P_err);
@@ -1154,6 +1256,14 @@ int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_to
                        ? "the spectrum is no power law in any band of the reliable data"
                        : "the fitted fractal dimension lies outside (2, 3)",
                    res->fit.D.value, res->fit.chi2_red, res->fit.kmin, res->fit.kmax);
+    if (res->has_fit && res->fit.noise_floor > 0) {
+        /* the floor ends the reliable band: above the fit band the bins are mostly noise */
+        size_t e = res->rel_first;
+        while (e + 1 <= res->rel_last && res->k[e + 1] <= res->fit.kmax * (1 + 1e-9))
+            e++;
+        if (res->hi[e] < res->rel_kmax)
+            res->rel_kmax = res->hi[e], res->rel_last = e, res->rel_by = LJGAP_RELIABLE_NOISE;
+    }
     if (res->has_fit && res->fit.noise_floor > 0)
         ljgap_warn(w,
                    "topography: a white-noise floor (P = %.3g) lies above the power law: the "
@@ -1198,6 +1308,7 @@ void ljgap_topo_tab_free(ljgap_topo_tab *t)
     free(t->k);
     free(t->P);
     free(t->P_err);
+    free(t->corr);
     memset(t, 0, sizeof *t);
 }
 
@@ -1212,6 +1323,67 @@ static double tab_int(const double *K, const double *V, size_t m, double x1, dou
         sum += seg_var(K[j], exp(V[j]), s, a, b);
     }
     return sum;
+}
+
+/* The knots' errors: the values solve g_b(V) = ln ∫_b (the table) − ln S_b = 0, so a change
+ * δ ln S of the bins' sums moves the free values by δV = J⁻¹ δ ln S, J_bc = ∂ ln ∫_b / ∂V_c
+ * (numerical, the edge knots tied to their neighbours as in the solve). The bins' relative
+ * errors are independent: cov V = J⁻¹ diag(P_err/P)² J⁻ᵀ. rel[j] receives the knot's relative
+ * error √cov_jj, corr[j] the correlation of knots j and j + 1 (0 for the last). The solve is a
+ * deconvolution of the interpolation's overlap between neighbouring bins, which amplifies
+ * alternating noise: the bins' own relative errors understate the knots' (issue 29). 0, or -1
+ * out of memory. */
+static int tab_errors(const ljgap_topo_result *r, size_t first, const double *K, const double *V0,
+                      size_t mm, size_t idx0, size_t nb, int lead, int trail, double s_end,
+                      const double *blo, const double *bhi, double *rel, double *corr)
+{
+    int st = -1;
+    double *V = malloc(mm * sizeof *V), *g0 = malloc(nb * sizeof *g0);
+    gsl_matrix *J = gsl_matrix_alloc(nb, nb), *X = gsl_matrix_calloc(nb, nb);
+    gsl_permutation *perm = gsl_permutation_alloc(nb);
+    if (!V || !g0 || !J || !X || !perm) goto out;
+    memcpy(V, V0, mm * sizeof *V);
+    for (size_t b = 0; b < nb; b++)
+        g0[b] = log(tab_int(K, V, mm, blo[b], bhi[b]));
+    const double h = 1e-6;
+    for (size_t c = 0; c < nb; c++) {
+        V[idx0 + c] += h;
+        if (lead) V[0] = V[1];
+        if (trail) V[mm - 1] = V[mm - 2] + s_end * log(K[mm - 1] / K[mm - 2]);
+        for (size_t b = 0; b < nb; b++)
+            gsl_matrix_set(J, b, c, (log(tab_int(K, V, mm, blo[b], bhi[b])) - g0[b]) / h);
+        memcpy(V, V0, mm * sizeof *V);
+    }
+    /* X = J⁻¹ diag(rel_b): column b solves J x = rel_b e_b */
+    int sgn;
+    if (gsl_linalg_LU_decomp(J, perm, &sgn)) goto out;
+    for (size_t b = 0; b < nb; b++) {
+        gsl_vector_view col = gsl_matrix_column(X, b);
+        gsl_vector_set(&col.vector, b, r->P_err[first + b] / r->P[first + b]);
+        if (gsl_linalg_LU_svx(J, perm, &col.vector)) goto out;
+    }
+    /* the knot j's row of X (the edge knots: their neighbour's) */
+    for (size_t j = 0; j < mm; j++) {
+        size_t a = j < idx0 ? 0 : j - idx0 >= nb ? nb - 1 : j - idx0;
+        size_t a2 = j + 1 < idx0 ? 0 : j + 1 - idx0 >= nb ? nb - 1 : j + 1 - idx0;
+        double vaa = 0, vbb = 0, vab = 0;
+        for (size_t b = 0; b < nb; b++) {
+            double x = gsl_matrix_get(X, a, b), y = gsl_matrix_get(X, a2, b);
+            vaa += x * x, vbb += y * y, vab += x * y;
+        }
+        rel[j] = sqrt(vaa);
+        corr[j] = j + 1 < mm && vaa > 0 && vbb > 0 ? vab / sqrt(vaa * vbb) : 0;
+        if (!(rel[j] > 0) || !isfinite(rel[j])) /* a singular solve: the bin's own */
+            rel[j] = r->P_err[first + a] / r->P[first + a], corr[j] = 0;
+    }
+    st = 0;
+out:
+    free(V);
+    free(g0);
+    gsl_matrix_free(J);
+    gsl_matrix_free(X);
+    gsl_permutation_free(perm);
+    return st;
 }
 
 #define TOPO_TAB_ITER                                                                              \
@@ -1280,13 +1452,16 @@ int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double tail_q, l
     t->k = malloc(mm * sizeof *t->k);
     t->P = malloc(mm * sizeof *t->P);
     t->P_err = malloc(mm * sizeof *t->P_err);
-    if (!t->k || !t->P || !t->P_err) goto end;
+    t->corr = calloc(mm, sizeof *t->corr);
+    if (!t->k || !t->P || !t->P_err || !t->corr) goto end;
     for (size_t j = 0; j < mm; j++) {
-        size_t b = j < idx0 ? 0 : j - idx0 >= nb ? nb - 1 : j - idx0, i = first + b;
         t->k[j] = K[j];
         t->P[j] = exp(V[j]);
-        t->P_err[j] = t->P[j] * r->P_err[i] / r->P[i];
     }
+    if (tab_errors(r, first, K, V, mm, idx0, nb, lead, trail, s_end, blo, bhi, t->P_err, t->corr))
+        goto end;
+    for (size_t j = 0; j < mm; j++)
+        t->P_err[j] *= t->P[j];
     t->n = mm;
     t->m0 = tab_int(K, V, mm, K[0], K[mm - 1]);
     t->m0_modes = 0;

@@ -50,7 +50,9 @@ typedef enum {
 typedef enum {
     LJGAP_RELIABLE_NYQUIST = 0,
     LJGAP_RELIABLE_TIP,
-    LJGAP_RELIABLE_RESOLUTION
+    LJGAP_RELIABLE_RESOLUTION,
+    LJGAP_RELIABLE_NOISE /* a white-noise floor: the band ends with the fit's (the floor at 20 %
+                          * of the law) */
 } ljgap_topo_by;
 
 typedef struct {
@@ -80,6 +82,7 @@ typedef struct {
                          * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
     double noise_floor; /* a white floor N (unit⁴) found above the band, P = C k^(2D-8) + N
                          * fitted with it (core/topo.c: fit_floor); 0: none */
+    double noise_floor_err; /* its standard error (the χ² profile's Δχ² = max(χ²_red, 1)) */
 } ljgap_topo_fit;
 
 typedef struct {
@@ -94,6 +97,8 @@ typedef struct {
     double *var;   /* owned: the variance the bin's modes carry, Σ P Δq² (a profile: its 2-D
                     * equivalent 2π ∫ k P dk of the converted bin over [lo, hi]) */
     double *slope; /* owned: the local slope d ln P / d ln k the bin's curvature correction used */
+    double *rho;   /* owned: the correlation of the bin's P with the next bin's (a windowed map's
+                    * neighbouring modes are correlated; 0 unwindowed); the fit's errors use it */
     /* profiles only (NULL for a map): the 1-D PSD PP the bins were converted from */
     double *PP;      /* owned: mean two-sided 1-D periodogram of the bin */
     double *PP_err;  /* owned: its standard error */
@@ -121,7 +126,9 @@ typedef struct {
 /* The psd object's table (ljgap_topo_table). */
 typedef struct {
     size_t n;
-    double *k, *P, *P_err; /* owned, n each */
+    double *k, *P, *P_err; /* owned, n each; P_err propagated through the solve (below) */
+    double *corr;          /* owned, n: correlation of the errors of knots j and j + 1 (the
+                            * solve makes neighbours anticorrelated); corr[n - 1] = 0 */
     double m0;             /* 2π ∫ k P dk of the table's log-log interpolation (no tail) */
     double m0_modes;       /* the variance of the modes the table stands for (Σ of var[]) */
 } ljgap_topo_tab;

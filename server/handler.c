@@ -812,6 +812,7 @@ static int run_psd(job *j)
     put(j, rel, "by",
         cJSON_CreateString(r.rel_by == LJGAP_RELIABLE_TIP          ? "tip"
                            : r.rel_by == LJGAP_RELIABLE_RESOLUTION ? "resolution"
+                           : r.rel_by == LJGAP_RELIABLE_NOISE      ? "noise"
                                                                    : "nyquist"));
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
@@ -833,6 +834,13 @@ static int run_psd(job *j)
         put_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
         put_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
         put_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);
+        if (r.fit.noise_floor > 0) { /* a white floor fitted with the law (m⁴) */
+            put_num(j, fit, "noise_floor", r.fit.noise_floor, "fit.noise_floor", -1);
+            put_num(j, efit, "noise_floor", r.fit.noise_floor_err, "error.fit.noise_floor", -1);
+        } else {
+            put(j, fit, "noise_floor", cJSON_CreateNull());
+            put(j, efit, "noise_floor", cJSON_CreateNull());
+        }
     } else {
         put(j, j->ans, "fit", cJSON_CreateNull());
         put(j, err, "fit", cJSON_CreateNull());

@@ -5,8 +5,11 @@
  * Retry-After). The server is the only validator of values: text that is not a number is sent as
  * it is, and each problem+json error is shown beside the field whose data-ptr names its JSON
  * pointer (longest prefix wins; a pointer no field claims goes to the panel's readout). Each panel
- * keeps its requests, answers and plotted series, which the export buttons write out as CSV, JSON
- * and PNG, or as curl commands that repeat the exact requests.
+ * keeps its requests, answers and plotted series, which the export buttons write out as CSV (the
+ * server's own CSV of the same requests where it has one: units, summary, SI, errors), JSON
+ * (requests, answers, series) and PNG (at 2x, with the parameters), or as curl commands that
+ * repeat the exact requests. A run empties the cards it did not ask for and marks the others
+ * "computed for" their inputs; a problem moves the view and the focus to the first bad field.
  */
 "use strict";
 
@@ -58,6 +61,7 @@
   function parseTable(text) {
     const k = [];
     const P = [];
+    const E = []; /* a third number on every line: P_err (as the topography card exports it) */
     const lines = text.split(/\r?\n/);
     for (let i = 0; i < lines.length; i++) {
       const line = lines[i].replace(/#.*/, "").trim();
@@ -67,6 +71,7 @@
       if (cells.length >= 2 && nums.slice(0, 2).every(Number.isFinite)) {
         k.push(nums[0]);
         P.push(nums[1]);
+        E.push(cells.length >= 3 && Number.isFinite(nums[2]) ? nums[2] : null);
       } else if (k.length === 0 && cells.some((c) => !Number.isFinite(Number(c)))) {
         continue; /* a header line */
       } else {
@@ -74,14 +79,17 @@
       }
     }
     if (k.length === 0) throw new ClientError("table", "no (k, P) rows in the table");
-    return { k, P };
+    return E.every((e) => e !== null) ? { k, P, P_err: E } : { k, P };
   }
 
+  let loadedTail = null; /* the tail of the spectrum "Use this spectrum" loaded */
   function psdObject() {
     if (document.querySelector('input[name="kind"]:checked').value === "table") {
       const psd = { kind: "table", ...parseTable($("table").value) };
       const q = field("tail");
       if (q !== undefined) psd.tail = { exponent: q };
+      /* a measured spectrum's tail keeps its error while the field holds its exponent */
+      if (loadedTail && q === loadedTail.exponent && loadedTail.exponent_err !== undefined) psd.tail.exponent_err = loadedTail.exponent_err;
       return psd;
     }
     const psd = { kind: "power" };
@@ -220,12 +228,25 @@
   /* Problems of one answer: beside their fields; the rest as text for the panel. */
   function placeProblem(problem, panel) {
     const loose = [];
+    const perField = {};
     for (const e of problem.errors || []) {
       const id = fieldFor(e.pointer || "", panel);
+      if (id) perField[id] = (perField[id] || 0) + 1;
+      if (id && perField[id] > 3) continue; /* a whole file of bad numbers: the first three */
       if (!id || !showFieldError(id, e.detail)) loose.push(`${e.pointer}: ${e.detail}`);
     }
-    if (!(problem.errors || []).length) loose.push(problem.detail || problem.title);
+    for (const [id, n] of Object.entries(perField)) if (n > 3) showFieldError(id, `and ${n - 3} more`);
+    if (loose.length > 5) loose.splice(5, loose.length - 5, `and ${loose.length - 5} more problems`);
     return loose;
+  }
+
+  /* The first field marked invalid (visible), brought into view and focused: null when none. */
+  function focusFirstInvalid() {
+    const bad = [...document.querySelectorAll(".invalid")].find((e) => e.offsetParent !== null);
+    if (!bad) return null;
+    bad.scrollIntoView({ block: "center" });
+    bad.focus({ preventScroll: true });
+    return bad;
   }
 
   /* ---- talking to the server ---- */
@@ -349,15 +370,23 @@
   const flatLJ = (g) => (3 * Math.sqrt(3) / 2) * (Math.pow(g, -3) - Math.pow(g, -9));
   const maxAbs = (a) => a.reduce((m, v) => Math.max(m, Math.abs(v)), 0);
 
+  /* Plots in SI: with a material (its answers have si) unless the switch says dimensionless. */
+  const siPlots = (ans) => !!(ans && ans.si && $("si-plots").checked);
+
   function showTraction(p, ans) {
     const s = ans.summary;
-    const g = ans.g_ave;
-    const area = g.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? ans.sigma[i] : null));
-    const flat = g.map(flatLJ);
-    p.xName = "g_ave";
+    const si = siPlots(ans);
+    /* in SI: gaps in m (ε g̃), tractions in Pa (σ0 σ̄/σ0) */
+    const gx = si ? ans.si.g_ave_m[0] / ans.g_ave[0] : 1; /* ε */
+    const sy = si ? ans.si.sigma0_Pa : 1;
+    const g = ans.g_ave.map((x) => x * gx);
+    const sig = ans.sigma.map((v) => v * sy);
+    const area = ans.g_ave.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? sig[i] : null));
+    const flat = ans.g_ave.map((x) => flatLJ(x) * sy);
+    p.xName = si ? "g_ave [m]" : "g_ave";
     p.series = [
-      { name: "σ̄/σ0 (rough)", x: g, y: ans.sigma, err: ans.error.sigma, color: COLORS[0] },
-      { name: "σ/σ0 flat LJ (8)", x: g, y: flat, color: "#777", dash: [6, 4], width: 1.5 },
+      { name: si ? "σ̄ (rough, Pa)" : "σ̄/σ0 (rough)", x: g, y: sig, err: si ? ans.si.error.sigma_Pa : ans.error.sigma, color: COLORS[0] },
+      { name: si ? "σ flat LJ (8), Pa" : "σ/σ0 flat LJ (8)", x: g, y: flat, color: "#777", dash: [6, 4], width: 1.5 },
       {
         name: "Δγeff area",
         x: g,
@@ -367,28 +396,29 @@
         width: 0,
       },
     ];
-    const pos = Math.max(...ans.sigma.filter(Number.isFinite), ...flat);
+    const pos = Math.max(...sig.filter(Number.isFinite), ...flat);
     const marks = [];
     if (s.g_eq !== null) {
-      marks.push({ type: "vline", x: s.g_eq, label: `g̃eq = ${fmt(s.g_eq, 4)}`, color: "#2e933c" });
+      marks.push({ type: "vline", x: s.g_eq * gx, label: si ? `geq = ${fmt(s.g_eq * gx, 4)} m` : `g̃eq = ${fmt(s.g_eq, 4)}`, color: "#2e933c" });
     }
     if (s.sigma_max !== null) {
       marks.push({
         type: "point",
-        x: s.g_at_max,
-        y: s.sigma_max,
-        label: `σ̄max/σ0 = ${fmt(s.sigma_max, 4)}`,
+        x: s.g_at_max * gx,
+        y: s.sigma_max * sy,
+        label: si ? `σ̄max = ${fmt(s.sigma_max * sy, 4)} Pa` : `σ̄max/σ0 = ${fmt(s.sigma_max, 4)}`,
         color: "#d1495b",
       });
     }
     LJPlots.draw($("plot-traction"), {
       title: plotTitles.traction,
-      xLabel: "g̃ave",
-      xName: "g̃ave",
-      yLabel: "σ̄/σ0",
+      xLabel: si ? "gave (m)" : "g̃ave",
+      xName: si ? "gave (m)" : "g̃ave",
+      yLabel: si ? "σ̄ (Pa)" : "σ̄/σ0",
       series: p.series,
       marks,
-      yClamp: [-1.5 * pos, 1.05],
+      params: p.params,
+      yClamp: [-1.5 * pos, 1.05 * sy],
     });
     const ro = $("readout-traction");
     ro.replaceChildren(
@@ -398,10 +428,13 @@
         { class: "meta" },
         `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)`
       ),
+      forLine(p),
       metaLine(ans),
       ...warnings(ans)
     );
   }
+
+  const forLine = (p) => el("div", { class: "meta computed-for" }, `computed for: ${p.params || "—"}`);
 
   function k2Label(k) {
     return k === null ? "∞" : String(k);
@@ -418,7 +451,8 @@
       ans.pdfs.forEach((pdf, i) => {
         const name = label ? `${label}, k̃2 = ${k2Label(pdf.k2)}` : `k̃2 = ${k2Label(pdf.k2)}`;
         const e = (ans.error.pdfs || [])[i] || {};
-        p.series.push({ name, x: pdf.g, y: pdf.phi, color: COLORS[c++ % COLORS.length], errL1: e.phi_l1 });
+        const sp = siPlots(ans) ? ans.si.pdfs[i] : null; /* in SI: g in m, Φ in 1/m */
+        p.series.push({ name, x: sp ? sp.g_m : pdf.g, y: sp ? sp.phi_per_m : pdf.phi, color: COLORS[c++ % COLORS.length], errL1: e.phi_l1 });
         t.append(
           el(
             "tr",
@@ -434,15 +468,27 @@
       });
       metas.push(metaLine(ans), ...warnings(ans));
     }
+    /* the x axis over where the densities live (Φ above 1e-4 of its peak), not the whole grid */
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (const s of p.series) {
+      const top = Math.max(...s.y.filter(Number.isFinite));
+      s.x.forEach((x, i) => {
+        if (s.y[i] > 1e-4 * top) (lo = Math.min(lo, x)), (hi = Math.max(hi, x));
+      });
+    }
+    const pdfSI = siPlots(results[0].ans);
     LJPlots.draw($("plot-pdf"), {
       title: `${plotTitles.pdf} at g̃ave = ${fmt(results[0].body.g_ave)}`,
-      xLabel: "g̃",
-      xName: "g̃",
-      yLabel: "Φ(g̃)",
+      xLabel: pdfSI ? "g (m)" : "g̃",
+      xName: pdfSI ? "g (m)" : "g̃",
+      yLabel: pdfSI ? "Φ (1/m)" : "Φ(g̃)",
       series: p.series,
       yZero: true,
+      params: p.params,
+      xRange: hi > lo ? [lo - 0.03 * (hi - lo), hi + 0.03 * (hi - lo)] : undefined,
     });
-    ro.replaceChildren(t, ...metas);
+    ro.replaceChildren(t, forLine(p), ...metas);
   }
 
   function showSweep(p, ans, body) {
@@ -464,6 +510,7 @@
       yLabel: "Δγeff/Δγ, σ̄max/σ0",
       xLog: logX,
       series: p.series,
+      params: p.params,
       yZero: true,
     });
     const t = el("table", {}, el("tr", {}, ...[names[ans.vary] || ans.vary, "g̃eq", "σ̄max/σ0", "Δγeff/Δγ", "largest ± err"].map((h) => el("th", {}, h))));
@@ -474,7 +521,7 @@
     });
     const worstAll = Math.max(...r.map((o) => Math.max(...Object.values((o && o.error) || {}).map(Math.abs))));
     const details = el("details", {}, el("summary", {}, `${x.length} points, largest error ${errFmt(worstAll)}: table`), t);
-    $("readout-sweep").replaceChildren(details, metaLine(ans), ...warnings(ans));
+    $("readout-sweep").replaceChildren(details, forLine(p), metaLine(ans), ...warnings(ans));
   }
 
   /* The PSD as the form gives it (client side: a picture of the input, with its cut-offs). */
@@ -547,28 +594,30 @@
     const e = ans.error || {};
     const pe = e.pull_off_N || {};
     const po = ans.pull_off_N || {};
-    const t = el("table", {}, el("tr", {}, el("th", {}, "pull-off"), el("th", {}, "N"), el("th", {}, "± err")));
-    const names = { jkr_smooth: "JKR, flat Δγ", jkr: "JKR with Δγeff", dmt: "DMT with Δγeff", maugis_dugdale: "Maugis–Dugdale" };
-    for (const k of Object.keys(po)) t.append(el("tr", {}, el("td", {}, names[k] || k), el("td", {}, fmt(po[k], 4)), el("td", {}, errFmt(pe[k]))));
+    const t = el("table", {}, el("tr", {}, ...["quantity", "value", "unit", "± err"].map((h) => el("th", {}, h))));
+    const names = { jkr_smooth: "pull-off, JKR, flat Δγ", jkr: "pull-off, JKR with Δγeff", dmt: "pull-off, DMT with Δγeff", maugis_dugdale: "pull-off, Maugis–Dugdale" };
+    for (const k of Object.keys(po)) t.append(el("tr", {}, el("td", {}, names[k] || k), el("td", {}, fmt(po[k], 4)), el("td", {}, "N"), el("td", {}, errFmt(pe[k]))));
     const tb = ans.tabor || {};
-    t.append(el("tr", {}, el("td", {}, "Tabor μ (flat / effective)"), el("td", {}, `${fmt(tb.smooth, 4)} / ${fmt(tb.effective, 4)}`), el("td", {}, errFmt(e.tabor && e.tabor.effective))));
-    t.append(el("tr", {}, el("td", {}, "Maugis λ"), el("td", {}, fmt(ans.maugis_lambda, 4)), el("td", {}, errFmt(e.maugis_lambda))));
-    t.append(el("tr", {}, el("td", {}, "regime"), el("td", {}, ans.regime || "—"), el("td", {}, "")));
+    t.append(el("tr", {}, el("td", {}, "Tabor μ (flat / effective)"), el("td", {}, `${fmt(tb.smooth, 4)} / ${fmt(tb.effective, 4)}`), el("td", {}, "1"), el("td", {}, errFmt(e.tabor && e.tabor.effective))));
+    t.append(el("tr", {}, el("td", {}, "Maugis λ"), el("td", {}, fmt(ans.maugis_lambda, 4)), el("td", {}, "1"), el("td", {}, errFmt(e.maugis_lambda))));
+    t.append(el("tr", {}, el("td", {}, "regime"), el("td", {}, ans.regime || "—"), el("td", {}, ""), el("td", {}, "")));
     p.series = [{ name: "pull_off_N", x: Object.keys(po), y: Object.values(po), err: Object.keys(po).map((k) => pe[k]) }];
     p.xName = "model";
     $("card-contact").hidden = false;
-    $("readout-contact").replaceChildren(t, metaLine(ans), ...warnings(ans));
+    $("readout-contact").replaceChildren(t, forLine(p), metaLine(ans), ...warnings(ans));
   }
 
   /* A problem answer of panel's request: beside the fields its pointers name, the rest in the
    * panel's readout. */
   function showProblem(panel, status, json) {
-    const loose = placeProblem(json || {}, panel);
+    json = json || {};
+    const loose = placeProblem(json, panel);
     const ro = $(`readout-${panel}`);
     ro.replaceChildren(
       el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`),
       ...loose.map((t) => el("div", { class: "problem" }, t))
     );
+    panels[panel].failed = true;
     if (panel === "contact") $("card-contact").hidden = false;
     else if ($(`plot-${panel}`)) LJPlots.clear($(`plot-${panel}`));
   }
@@ -577,7 +626,43 @@
 
   let running = false;
 
-  async function run() {
+  /* The inputs a result was computed for, in one line (the "computed for" of each card). */
+  function describe(base) {
+    const q = base.psd;
+    const si = base.units === "SI";
+    const parts = [];
+    if (q.kind === "table") {
+      parts.push(`table PSD of ${q.k.length} points, k ${fmt(q.k[0], 4)} … ${fmt(q.k[q.k.length - 1], 4)}${si ? " 1/m" : ""}${q.tail ? `, tail k^${fmt(q.tail.exponent, 4)}` : ""}`);
+    } else {
+      for (const key of ["D", "H", "C", "m0", "h_rms", "k1"]) if (q[key] !== undefined) parts.push(`${key} = ${q[key]}`);
+      parts.push(`k2 = ${q.k2 === undefined || q.k2 === null ? "∞" : q.k2}`);
+    }
+    parts.push(si ? "SI" : "dimensionless");
+    if (base.method) parts.push(`method ${base.method}`);
+    const m = base.material;
+    if (m) parts.push(`material ${Object.entries(m).map(([k, v]) => `${k} = ${v}`).join(", ")}`);
+    return parts.join("; ");
+  }
+
+  /* A card with no result (a run that did not ask for it): empty, so nothing stale stays. */
+  function emptyPanel(name) {
+    resetPanel(name);
+    if ($(`plot-${name}`)) LJPlots.clear($(`plot-${name}`));
+    if ($(`readout-${name}`)) $(`readout-${name}`).textContent = "No result yet.";
+  }
+
+  /* Export buttons live only on a card with something to export. */
+  function updateExports() {
+    for (const box of document.querySelectorAll(".exports")) {
+      const p = panels[box.dataset.panel];
+      /* CSV and PNG need a result; JSON and curl also carry a refused request and its problem */
+      const drawn = !!p && p.series.length > 0;
+      const asked = !!p && (drawn || p.answers.length > 0);
+      for (const b of box.querySelectorAll("button")) b.disabled = /^(csv|png)$/.test(b.dataset.export) ? !drawn : !asked;
+    }
+  }
+
+  async function run(opts = {}) {
     if (running) return;
     clearErrors();
     let reqs;
@@ -586,6 +671,7 @@
     } catch (e) {
       if (e instanceof ClientError) {
         showFieldError(e.fieldId, e.message);
+        focusFirstInvalid();
         setIdle("Fix the highlighted field.", true);
         return;
       }
@@ -594,10 +680,15 @@
     const base = common();
     running = true;
     $("compute").disabled = true;
+    $("compute-top").disabled = true;
     abort = new AbortController();
-    /* panels not asked for this time keep their last result (and its exports) */
-    for (const n of new Set(reqs.map((r) => r.panel))) resetPanel(n);
-    resetPanel("psd");
+    /* every calculation card starts afresh: those not asked for this time are emptied (a result
+     * of other inputs must not stay beside this one's) */
+    for (const n of ["traction", "pdf", "sweep", "contact"]) {
+      if (reqs.some((r) => r.panel === n)) resetPanel(n).params = describe(base);
+      else emptyPanel(n);
+    }
+    resetPanel("psd").params = describe(base);
     if (!reqs.some((r) => r.panel === "contact")) $("card-contact").hidden = true;
     showPsd(base, null);
     const byPanel = {};
@@ -636,15 +727,64 @@
           else if (r.panel === "contact") showContact(p0, got[0].ans);
         }
       }
-      setIdle(failed ? `${failed} of ${reqs.length} requests answered with a problem: see the highlighted fields.` : `Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`, failed > 0);
+      if (failed) {
+        const bad = focusFirstInvalid();
+        const cards = [...new Set(reqs.filter((r) => panels[r.panel].failed).map((r) => r.panel))];
+        if (!bad) $(`card-${cards[0]}`).scrollIntoView({ block: "start" });
+        setIdle(`${failed} of ${reqs.length} requests answered with a problem: ${bad ? `see the highlighted field${document.querySelectorAll(".invalid").length > 1 ? "s" : ""}` : `see the ${cards.length > 1 ? `${cards.slice(0, -1).join(", ")} and ${cards[cards.length - 1]}` : cards[0]} card${cards.length > 1 ? "s" : ""}`}.`, true);
+      } else {
+        setIdle(`Done: ${reqs.length} request${reqs.length === 1 ? "" : "s"}.`);
+        const first = reqs.length ? $(`card-${reqs[0].panel}`) : null;
+        if (first && !opts.stay) {
+          const r = first.getBoundingClientRect();
+          if (r.top < 0 || r.top > innerHeight * 0.6) first.scrollIntoView({ block: "start" });
+        }
+      }
     } catch (e) {
       if (e.name === "AbortError") setIdle("Cancelled.", true);
       else setIdle(`Request failed: ${e.message}`, true);
     } finally {
       running = false;
       $("compute").disabled = false;
+      $("compute-top").disabled = false;
       abort = null;
+      updateExports();
     }
+  }
+
+  /* A measured spectrum (the SI psd object of /v1/psd or /v1/psd/combine) as the calculation's
+   * PSD with the form's material: the form switches to that table in SI, the gaps are placed
+   * about its g̃eq (asked of /v1/adhesion), and the traction, the PDF at g̃eq and, with a sphere
+   * radius, the pull-off run and are drawn. */
+  async function useSpectrum(q, label) {
+    if (running) return;
+    document.querySelector('input[name="kind"][value="table"]').checked = true;
+    const head = `k [1/m], P [m^4]${q.P_err ? ", P_err [m^4]" : ""}`;
+    const rows = q.k.map((k, i) => [k, q.P[i], ...(q.P_err ? [q.P_err[i]] : [])].join(", "));
+    $("table").value = [`# ${label}`, head, ...rows].join("\n");
+    $("tail").value = q.tail ? String(q.tail.exponent) : "";
+    loadedTail = q.tail || null;
+    $("units").value = "SI";
+    $("do-traction").checked = true;
+    $("do-pdf").checked = true;
+    $("do-sweep").checked = false;
+    $("pdf-k2").value = "∞";
+    for (const id of ["grid-min", "grid-max", "grid-n"]) $(id).value = "";
+    $("method").value = "pde";
+    $("preset-note").textContent = `The measured spectrum (${label}) in SI with the material above.`;
+    syncVisibility();
+    const base = common();
+    setBusy("adhesion of the measured spectrum (for the range of gaps)");
+    const res = await post("adhesion", JSON.stringify({ psd: base.psd, material: base.material, units: "SI" }));
+    if (res.status === 200 && Number.isFinite(res.json.g_eq)) {
+      const g = res.json.g_eq;
+      $("g-min").value = fmt(Math.max(0.5, 0.85 * g), 4);
+      $("g-max").value = fmt(Math.max(2 * g, g + 2), 4);
+      $("pdf-g").value = fmt(g, 5);
+    }
+    setIdle("");
+    await run({ stay: true });
+    $("card-traction").scrollIntoView({ block: "start" });
   }
 
   /* ---- exports ---- */
@@ -663,10 +803,46 @@
     return /[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s;
   };
 
-  /* Every plotted series of a panel, long form: series, x, y, error. */
-  function panelCSV(name) {
+  /* The server's own CSV (docs/api.md "CSV": units, the summary, SI and the errors) of each
+   * request of the panel it answered, one after another with the request as a # line; the
+   * panels whose answers have no CSV form write their series with units (pageCSV). */
+  const SERVER_CSV = ["traction", "pdf", "sweep"];
+  async function panelCSV(name) {
     const p = panels[name];
-    const lines = [["series", p.xName, "value", "error"].map(csvCell).join(",")];
+    if (name === "contact") return contactCSV(p);
+    if (name === "topo") return (typeof LJTopo !== "undefined" && LJTopo.psdCSV()) || pageCSV(name);
+    if (!SERVER_CSV.includes(name)) return pageCSV(name);
+    const parts = [];
+    for (const [i, r] of p.requests.entries()) {
+      const a = p.answers[i];
+      if (!a || (a.type && a.status >= 400)) continue; /* a refused request has no CSV */
+      const res = await fetch(`/v1/${r.endpoint}`, { method: "POST", headers: { "Content-Type": "application/json", Accept: "text/csv" }, body: r.text });
+      const text = await res.text();
+      if (!res.ok) throw new Error(`the server's CSV of ${r.endpoint}: ${res.status}`);
+      parts.push(`# request: POST /v1/${r.endpoint}${r.label ? ` (${r.label})` : ""} ${r.text}\n${text}`);
+    }
+    return parts.join("\n");
+  }
+
+  /* The pull-off card as CSV: one row a quantity, with its unit and error. */
+  function contactCSV(p) {
+    const a = p.answers.find((x) => x && x.pull_off_N) || {};
+    const e = a.error || {};
+    const lines = [`# ljgap contact: ${p.params || ""}`, "quantity,value,unit,error"];
+    for (const [k, v] of Object.entries(a.pull_off_N || {})) lines.push([`pull_off_N.${k}`, v, "N", (e.pull_off_N || {})[k]].map(csvCell).join(","));
+    const tb = a.tabor || {};
+    for (const k of Object.keys(tb)) lines.push([`tabor.${k}`, tb[k], "1", (e.tabor || {})[k]].map(csvCell).join(","));
+    lines.push(["maugis_lambda", a.maugis_lambda, "1", e.maugis_lambda].map(csvCell).join(","));
+    lines.push(["regime", a.regime, "", ""].map(csvCell).join(","));
+    return lines.join("\n") + "\n";
+  }
+
+  /* Every plotted series of a panel, long form: series, x, y, error, with the axes' units. */
+  function pageCSV(name) {
+    const p = panels[name];
+    const fig = $(`plot-${name}`) ? LJPlots.figure($(`plot-${name}`)) : null;
+    const lines = [`# ljgap ${name}: ${p.params || p.title}`];
+    lines.push(["series", fig ? fig.xLabel : p.xName, fig ? `value: ${fig.yLabel}` : "value", "error"].map(csvCell).join(","));
     for (const s of p.series) {
       s.x.forEach((x, i) => {
         if (s.y[i] === null || s.y[i] === undefined) return;
@@ -711,25 +887,32 @@
     }
   }
 
+  const cardNames = { traction: "Traction", pdf: "PDF", sweep: "Sweep", psd: "PSD", contact: "Pull-off", jobs: "Simulation", topo: "Topography" };
+
   function addExports() {
     for (const box of document.querySelectorAll(".exports")) {
       const name = box.dataset.panel;
       const b = (label, fn) => {
-        const btn = el("button", { type: "button", "data-export": label.toLowerCase().replace(/ /g, "-") }, label);
-        btn.addEventListener("click", () => {
+        /* named by its card ("Traction CSV"), for the eye and for a screen reader */
+        const btn = el("button", { type: "button", "data-export": label.toLowerCase().replace(/ /g, "-"), disabled: "" }, `${cardNames[name]} ${label}`);
+        btn.addEventListener("click", async () => {
           if (!panels[name] || (!panels[name].series.length && !panels[name].requests.length)) {
             setIdle("Nothing to export yet: compute first.", true);
             return;
           }
-          fn();
+          try {
+            await fn();
+          } catch (e) {
+            setIdle(`Export failed: ${e.message}`, true);
+          }
         });
         box.append(btn);
       };
-      b("CSV", () => download(`ljgap-${name}.csv`, new Blob([panelCSV(name)], { type: "text/csv" })));
+      b("CSV", async () => download(`ljgap-${name}.csv`, new Blob([await panelCSV(name)], { type: "text/csv" })));
       b("JSON", () => download(`ljgap-${name}.json`, new Blob([panelJSON(name)], { type: "application/json" })));
       if (name !== "contact") {
         b("PNG", async () => {
-          const blob = await LJPlots.toPNG($(`plot-${name}`));
+          const blob = await LJPlots.toPNG($(`plot-${name}`), panels[name].params);
           if (blob) download(`ljgap-${name}.png`, blob);
         });
       }
@@ -803,7 +986,34 @@
 
   /* ---- visibility of optional parts ---- */
 
+  /* χ = 3ε²E* / (16Δγ) (theory.md (15)) of the form's material, in m; null when not a number. */
+  function chiOf(m) {
+    if (!m) return null;
+    let E = m.E_star;
+    if (E === undefined && [m.E1, m.nu1, m.E2, m.nu2].every((v) => typeof v === "number")) E = 1 / ((1 - m.nu1 * m.nu1) / m.E1 + (1 - m.nu2 * m.nu2) / m.E2);
+    const chi = (3 * m.epsilon * m.epsilon * E) / (16 * m.dgamma);
+    return Number.isFinite(chi) && chi > 0 ? chi : null;
+  }
+
+  /* SI mode: the fields say their units, k1 its minimum k0/χ, the sweep its variable's unit. */
+  function syncUnits() {
+    const si = $("units").value === "SI";
+    const chi = chiOf(materialObject());
+    const min = si ? (chi ? `> k0/χ = ${fmt(K0 / chi, 4)} 1/m` : "> k0/χ: give the material") : "> k̃0 ≈ 0.46978";
+    $("k1-label").textContent = si ? `k1 (lower cut-off, 1/m, ${min})` : `k̃1 (lower cut-off, ${min})`;
+    $("k2-label").textContent = si ? "k2 (upper cut-off, 1/m)" : "k̃2 (upper cut-off)";
+    $("table-label").textContent = si
+      ? "k (1/m), P (m⁴) per line (CSV; # comments and a header line are skipped; a third column is P_err)"
+      : "k̃, P̃S per line (CSV; # comments and a header line are skipped; a third column is P_err)";
+    const levels = si ? { C: "C (P = C k^(2D−8), m^(2D−4))", m0: "m0 (height variance, m²)", h_rms: "h_rms (m)" } : { C: "C (P̃S = C k̃^(2D−8))", m0: "m̃0 (height variance)", h_rms: "h_rms" };
+    for (const o of $("level-kind").options) o.textContent = levels[o.value];
+    const vary = si ? { m0: "m0 (m²)", C: "C (SI)", D: "D", k1: "k1 (1/m)" } : { m0: "m̃0", C: "C", D: "D", k1: "k̃1" };
+    for (const o of $("vary").options) o.textContent = vary[o.value];
+    $("sweep-units").textContent = si ? "values in SI, as the PSD" : "";
+  }
+
   function syncVisibility() {
+    syncUnits();
     const table = document.querySelector('input[name="kind"]:checked').value === "table";
     $("power-fields").hidden = table;
     $("table-fields").hidden = !table;
@@ -824,7 +1034,9 @@
     p.series = series;
     p.xName = figOpts.xName || "x";
     p.answers = answers;
-    return LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, ...figOpts });
+    const u = LJPlots.draw($(`plot-${name}`), { title: plotTitles[name], series, params: p.params, ...figOpts });
+    updateExports();
+    return u;
   }
 
   async function probeJobs() {
@@ -838,7 +1050,7 @@
     if (!op || !op.post || /planned/i.test(op.post.summary || "") || typeof LJJobs === "undefined") return;
     LJJobs.init({
       common, post, el, list, val, fmt, errFmt, clearErrors, showSeries,
-      placeProblem,
+      placeProblem, setIdle, focusFirstInvalid,
       claim: collectClaims,
       /* a simulation starts the panel afresh, unless it is kept beside the previous job */
       panel: (name, { keep, ...req }) => {
@@ -863,7 +1075,8 @@
       b.addEventListener("click", () => applyPreset(b.dataset.preset));
     }
     $("cancel").addEventListener("click", () => abort && abort.abort());
-    for (const id of ["k2-inf", "method", "use-material", "modulus-kind"]) $(id).addEventListener("change", syncVisibility);
+    for (const id of ["k2-inf", "method", "use-material", "modulus-kind", "units"]) $(id).addEventListener("change", syncVisibility);
+    for (const id of ["E_star", "E1", "nu1", "E2", "nu2", "dgamma", "epsilon"]) $(id).addEventListener("input", syncUnits);
     for (const r of document.querySelectorAll('input[name="kind"]')) r.addEventListener("change", syncVisibility);
     $("table-file").addEventListener("change", async () => {
       const f = $("table-file").files[0];
@@ -883,15 +1096,17 @@
     } catch (e) {
       /* the picture waits for a usable form */
     }
+    updateExports();
     probeJobs();
     if (typeof LJTopo !== "undefined") {
       LJTopo.init({
         panels, post, el, val, fmt, errFmt, clearErrors, placeProblem, showFieldError, showSeries,
         resetPanel, materialObject, summaryTable, metaLine, warnings, setBusy, setIdle, download,
+        updateExports, emptyPanel, useSpectrum, focusFirstInvalid,
       });
     }
   }
 
-  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem };
+  window.LJApp = { panels, run, applyPreset, panelCSV, panelJSON, panelCurl, fieldFor, requests: buildRequests, showProblem, describe };
   init();
 })();

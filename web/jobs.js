@@ -38,12 +38,13 @@ const LJJobs = (() => {
       input("sim-real", "realizations", "4", "/realizations"),
       input("sim-seed", "seed", "1", "/seed"),
       input("sim-g", "mean gaps g̃ave (list)", "1.2, 1.5, 2, 2.5, 3, 4", "/g_ave"),
+      input("sim-k2", "k̃2 of the simulated surface when the PSD's is ∞ (the grid needs a band-limited spectrum; Fig. 6: 8)", "8", "/psd/k2"),
       input("sim-ksplit", "k̃split (hybrid: the grid carries [k̃1, k̃split], the finer band acts through the theory; empty: the full model)", "", "/k_split"),
       api.el(
         "div",
         { class: "field", id: "sim-full-field" },
         api.el("label", { for: "sim-full", class: "inline" }, api.el("input", { id: "sim-full", type: "checkbox" }), " also run the full model, on n ="),
-        api.el("input", { id: "sim-nfull", type: "text", value: "128" }),
+        api.el("input", { id: "sim-nfull", type: "text", value: "128", "aria-label": "n of the full model" }),
         api.el("span", { class: "err", "data-for": "sim-nfull" })
       ),
       api.el(
@@ -70,7 +71,10 @@ const LJJobs = (() => {
   /* The job's body, and the full model's beside a hybrid when asked (null otherwise). */
   function requests() {
     const c = api.common();
-    const body = { psd: c.psd, g_ave: api.list($("sim-g").value) };
+    const body = { psd: { ...c.psd }, g_ave: api.list($("sim-g").value) };
+    /* the form's k̃2 = ∞ is no band: the job takes the card's own finite k̃2 (the defaults run) */
+    if (body.psd.kind === "power" && (body.psd.k2 === undefined || body.psd.k2 === null) && api.val($("sim-k2").value) !== undefined) body.psd.k2 = api.val($("sim-k2").value);
+    if (c.units) body.units = c.units;
     if (c.material) body.material = c.material;
     for (const [id, key] of [["sim-L", "L"], ["sim-n", "n"], ["sim-real", "realizations"], ["sim-seed", "seed"], ["sim-ksplit", "k_split"]]) {
       const v = api.val($(id).value);
@@ -97,6 +101,10 @@ const LJJobs = (() => {
     const loose = api.placeProblem(json, "jobs");
     $("sim-state").textContent = `${status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}`;
     $("sim-state").dataset.status = "refused";
+    /* the header and the view say it too: the field that was refused, else the job's line */
+    const bad = api.focusFirstInvalid ? api.focusFirstInvalid() : null;
+    if (!bad) $("sim-state").scrollIntoView({ block: "center" });
+    if (api.setIdle) api.setIdle(`The simulation was refused (${status}): ${bad ? "see the highlighted field" : "see the simulation card"}.`, true);
   }
 
   function state(s, what) {
@@ -121,19 +129,47 @@ const LJJobs = (() => {
       const loose = (json.errors || []).map((e) => `${e.pointer}: ${e.detail}`);
       return { text: `${what}: ${r.status} ${json.title || ""}: ${[json.detail, ...loose].filter(Boolean).join("; ")}` };
     }
-    current = { id: json.id, cancelled: false };
+    current = { id: json.id, cancelled: false, what };
+    remember({ id: json.id, what, body });
     state(json, what);
+    return poll(what);
+  }
+
+  /* The running job in the URL's #job= and in localStorage: a reload finds it again. */
+  const KEY = "ljgap-job";
+  function remember(job) {
+    try {
+      if (job) localStorage.setItem(KEY, JSON.stringify(job));
+      else localStorage.removeItem(KEY);
+    } catch (e) {
+      /* storage refused: the job is not kept over a reload */
+    }
+    history.replaceState(null, "", job ? `#job=${job.id}` : location.pathname + location.search);
+  }
+
+  /* Polls the current job to its end: as runJob answers. */
+  async function poll(what) {
     for (;;) {
       await sleep(POLL_MS);
-      if (current.cancelled) return { text: "cancelled" };
+      if (current.cancelled) {
+        remember(null);
+        return { text: "" };
+      }
       const g = await fetch(`/v1/simulations/${current.id}`);
       const s = await g.json().catch(() => ({}));
-      if (g.status !== 200) return { text: `${g.status} ${s.title || ""}: ${s.detail || ""}` };
+      if (g.status !== 200) {
+        remember(null);
+        return { text: `${g.status} ${s.title || ""}: ${s.detail || ""}` };
+      }
       state(s, what);
-      if (s.status === "done") return { result: s.result, elapsed: s.elapsed_ms };
+      if (s.status === "done") {
+        remember(null);
+        return { result: s.result, elapsed: s.elapsed_ms };
+      }
       if (s.status !== "queued" && s.status !== "running") {
+        remember(null);
         const p = s.problem || {};
-        return { text: `${s.status}: ${p.detail || p.title || ""}` };
+        return { text: p.detail || p.title || "" };
       }
     }
   }
@@ -162,7 +198,8 @@ const LJJobs = (() => {
     current = null;
     $("sim-start").disabled = false;
     $("sim-cancel").disabled = true;
-    if (text !== null) $("sim-state").textContent += ` — ${text}`;
+    /* "done in 3.1 s" replaces the last poll's "done, 100 %, 3.1 s" rather than repeating it */
+    if (text) $("sim-state").textContent = $("sim-state").textContent.replace(/: (done|cancelled|failed), \d+ %, [^,]*$/, ": $1") + ` — ${text}`;
   }
 
   async function cancel() {
@@ -170,7 +207,7 @@ const LJJobs = (() => {
     current.cancelled = true;
     const r = await fetch(`/v1/simulations/${current.id}`, { method: "DELETE" });
     const s = await r.json().catch(() => ({}));
-    if (s.id) state(s, "cancelled");
+    if (s.id) state(s, current ? current.what : "numerical"); /* its status says cancelled (or done, when it had ended) */
   }
 
   /* The runs with their error bars' half-widths, beside the theory over the same range. */
@@ -234,11 +271,32 @@ const LJJobs = (() => {
     $("readout-jobs").replaceChildren(...lines.flat());
   }
 
+  /* After a reload: the job of the URL (#job=ID) or of localStorage, followed to its end. */
+  async function resume() {
+    let job = null;
+    try {
+      job = JSON.parse(localStorage.getItem(KEY) || "null");
+    } catch (e) {
+      job = null;
+    }
+    const m = location.hash.match(/job=([0-9a-f]+)/);
+    if (m && (!job || job.id !== m[1])) job = { id: m[1], what: "numerical", body: null };
+    if (!job || current) return;
+    current = { id: job.id, cancelled: false, what: `${job.what} (resumed)` };
+    $("sim-start").disabled = true;
+    $("sim-cancel").disabled = false;
+    $("sim-state").textContent = `job ${job.id.slice(0, 8)}… (from before the reload): asking…`;
+    const a = await poll(`${job.what} (resumed)`);
+    if (a.result && job.body) await show(job.body, [{ res: a.result, body: job.body, hybrid: job.body.k_split !== undefined }]);
+    finish(a.result ? `done in ${api.fmt(a.elapsed / 1000, 3)} s` : a.text);
+  }
+
   function init(helpers) {
     api = helpers;
     $("jobs-card").hidden = false;
     $("card-jobs").hidden = false;
     build();
+    resume();
   }
 
   return { init, request, refused };

@@ -27,9 +27,9 @@ const LJPlots = (() => {
   }
 
   /* Canvas marks: {type:"vline", x, label, color, dash} or {type:"point", x, y, label, color}. */
-  function drawMarks(u, marks) {
+  function drawMarks(u, marks, k = 1) {
     const ctx = u.ctx;
-    const dpr = devicePixelRatio || 1;
+    const dpr = (devicePixelRatio || 1) * k;
     const { left, top, width, height } = u.bbox;
     ctx.save();
     ctx.font = `${12 * dpr}px system-ui, sans-serif`;
@@ -66,6 +66,36 @@ const LJPlots = (() => {
         }
       }
     }
+    ctx.restore();
+  }
+
+  /* Error bars (± err) on the series drawn as points (numerical results, sweeps, measured bins). */
+  function drawErrorBars(u, fig, k = 1) {
+    const ctx = u.ctx;
+    const dpr = (devicePixelRatio || 1) * k;
+    ctx.save();
+    fig.series.forEach((s, si) => {
+      if (!s.points || !s.err || (u.series[si + 1] && u.series[si + 1].show === false)) return;
+      ctx.strokeStyle = s.color || "#333";
+      ctx.lineWidth = 1.2 * dpr;
+      s.x.forEach((x, i) => {
+        const y = s.y[i];
+        const e = s.err[i];
+        if (!Number.isFinite(y) || !Number.isFinite(e) || !(e > 0)) return;
+        const px = u.valToPos(x, "x", true);
+        const lo = u.valToPos(fig.yLog ? Math.max(y - e, y * 1e-3) : y - e, "y", true);
+        const hi = u.valToPos(y + e, "y", true);
+        if (![px, lo, hi].every(Number.isFinite) || Math.abs(lo - hi) < 2 * dpr) return;
+        ctx.beginPath();
+        ctx.moveTo(px, lo);
+        ctx.lineTo(px, hi);
+        ctx.moveTo(px - 3 * dpr, lo);
+        ctx.lineTo(px + 3 * dpr, lo);
+        ctx.moveTo(px - 3 * dpr, hi);
+        ctx.lineTo(px + 3 * dpr, hi);
+        ctx.stroke();
+      });
+    });
     ctx.restore();
   }
 
@@ -110,13 +140,15 @@ const LJPlots = (() => {
       });
   }
 
-  function axis(label, log, extra) {
-    const a = { label, labelSize: 18, stroke: "#333", grid: { stroke: "#eee" }, values: tickLabels(log) };
+  function axis(label, log, extra, k = 1) {
+    const a = { label, labelSize: 18 * k, stroke: "#333", grid: { stroke: "#eee", width: k }, ticks: { width: k, size: 10 * k }, values: tickLabels(log) };
+    if (k !== 1) Object.assign(a, { font: `${12 * k}px system-ui, sans-serif`, labelFont: `bold ${12 * k}px system-ui, sans-serif`, gap: 5 * k, size: 50 * k });
     if (log) a.splits = decades;
     return Object.assign(a, extra);
   }
 
-  function options(fig, width) {
+  /* k: the scale of everything drawn (2 for the PNG's chart, drawn twice as large) */
+  function options(fig, width, k = 1) {
     const series = [
       { label: fig.xName || fig.xLabel, value: (u, v) => fmt(v) },
     ];
@@ -124,12 +156,12 @@ const LJPlots = (() => {
       const o = {
         label: s.name,
         stroke: s.color,
-        width: s.width || 2,
+        width: (s.width === undefined ? 2 : s.width) * k,
         spanGaps: !s.fill,
-        points: { show: !!s.points, size: 6, fill: s.color },
+        points: { show: !!s.points, size: 6 * k, fill: s.color },
         value: (u, v) => fmt(v),
       };
-      if (s.dash) o.dash = s.dash;
+      if (s.dash) o.dash = s.dash.map((d) => d * k);
       if (s.fill) {
         o.fill = s.fill;
         o.fillTo = 0;
@@ -138,7 +170,7 @@ const LJPlots = (() => {
     }
     return {
       width,
-      height: HEIGHT,
+      height: HEIGHT * k,
       series,
       scales: {
         x: fig.xRange
@@ -146,10 +178,10 @@ const LJPlots = (() => {
           : { time: false, distr: fig.xLog ? 3 : 1, log: 10 },
         y: { distr: fig.yLog ? 3 : 1, log: 10, range: yRange(fig) },
       },
-      axes: [axis(fig.xLabel, fig.xLog, {}), axis(fig.yLabel, fig.yLog, { size: 64 })],
-      legend: { live: true },
-      cursor: { drag: { x: true, y: false } },
-      hooks: { draw: [(u) => drawMarks(u, fig.marks || [])] },
+      axes: [axis(fig.xLabel, fig.xLog, {}, k), axis(fig.yLabel, fig.yLog, { size: 64 * k }, k)],
+      legend: { live: true, show: k === 1 },
+      cursor: { drag: { x: true, y: false }, show: k === 1 },
+      hooks: { draw: [(u) => drawErrorBars(u, fig, k), (u) => drawMarks(u, fig.marks || [], k)] },
     };
   }
 
@@ -185,13 +217,27 @@ const LJPlots = (() => {
   }
 
   /* PNG of the chart in el: white background, title, the plot canvas, a legend line. */
-  function toPNG(el) {
+  async function toPNG(el, params) {
     const c = charts.get(el);
-    if (!c) return Promise.resolve(null);
-    const src = c.u.ctx.canvas;
-    const dpr = devicePixelRatio || 1;
+    if (!c) return null;
+    /* at least 2 pixels per CSS pixel: the chart drawn again at that ratio when the screen's is lower */
+    let src = c.u.ctx.canvas;
+    let dpr = devicePixelRatio || 1;
+    let tmp = null;
+    if (dpr < 2) {
+      const k = 2 / dpr;
+      const box = document.createElement("div");
+      box.style.cssText = "position:absolute;left:-100000px;top:0;";
+      document.body.append(box);
+      tmp = new uPlot(options(c.fig, c.u.width * k, k), c.u.data, box);
+      await new Promise((r) => setTimeout(r, 0)); /* uPlot sizes and draws in a microtask */
+      src = tmp.ctx.canvas;
+      dpr = 2;
+      tmp.box = box;
+    }
     const head = 28 * dpr;
-    const foot = 24 * dpr;
+    const lines = wrap(params || c.fig.params || "", 110);
+    const foot = (24 + 16 * lines.length) * dpr;
     const out = document.createElement("canvas");
     out.width = src.width;
     out.height = src.height + head + foot;
@@ -214,7 +260,26 @@ const LJPlots = (() => {
       ctx.fillText(s.name, x, y);
       x += ctx.measureText(s.name).width + 14 * dpr;
     }
+    /* the parameters it was computed for, under the legend */
+    ctx.fillStyle = "#444";
+    lines.forEach((l, i) => ctx.fillText(l, 8 * dpr, y + (16 + 16 * i) * dpr));
+    if (tmp) {
+      tmp.destroy();
+      tmp.box.remove();
+    }
     return new Promise((resolve) => out.toBlob(resolve, "image/png"));
+  }
+
+  /* text cut into lines of at most n characters, at spaces */
+  function wrap(text, n) {
+    const out = [];
+    let line = "";
+    for (const w of String(text).split(" ")) {
+      if (line && line.length + 1 + w.length > n) out.push(line), (line = w);
+      else line = line ? `${line} ${w}` : w;
+    }
+    if (line) out.push(line);
+    return out;
   }
 
   /* Whether the plot canvas of el has any non-transparent pixel inside the plotting area. */

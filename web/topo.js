@@ -17,6 +17,11 @@
  * with error.P, as `ljgap combine` takes them) go to POST /v1/psd/combine. The plot shows each
  * measurement's bins, the combination with its error band (P ± P_err) and its fit; the
  * combination is what k1, k2 and the adhesion then use, and "Combined PSD as CSV" exports it.
+ *
+ * "Use this spectrum" (issue 30): the psd object between k1 and k2 (one map's or the
+ * combination's, P_err and tail kept) goes with the material into the page's calculation
+ * (LJApp's useSpectrum): traction, PDF and, with a radius, the pull-off, in SI. An empty or
+ * binary file is refused here in one line; a refused map empties the card.
  */
 "use strict";
 
@@ -71,7 +76,22 @@ const LJTopo = (() => {
     const f = fitLine(a);
     if (f) series.push({ name: `fit: D = ${api.fmt(a.fit.D, 4)} ± ${api.errFmt(a.error.fit.D)}`, x: f.k, y: f.P, color: "#d1495b", dash: [6, 4] });
     const marks = a.domain ? [{ type: "vline", x: a.domain.k0, label: "k0/χ", color: "#d1495b", dash: [2, 3], row: 1 }] : [];
+    marks.push(...bands(a));
     plot(series, a.k.concat(a.domain ? [a.domain.k0] : []), marks, p.answers);
+  }
+
+  /* The fit band and the reliable band of an answer, as marks on the plot. */
+  function bands(a) {
+    const out = [];
+    if (a.reliable && a.reliable.k_min) {
+      out.push({ type: "vline", x: a.reliable.k_min, label: "reliable from", color: "#8e44ad", dash: [1, 3], row: 2 });
+      out.push({ type: "vline", x: a.reliable.k_max, label: "reliable to", color: "#8e44ad", dash: [1, 3], row: 2 });
+    }
+    if (a.fit && a.fit.k_min) {
+      out.push({ type: "vline", x: a.fit.k_min, label: "fit band", color: "#e67e22", dash: [4, 2], row: 3 });
+      out.push({ type: "vline", x: a.fit.k_max, label: "fit band", color: "#e67e22", dash: [4, 2], row: 3 });
+    }
+    return out;
   }
 
   /* The panel's log-log chart of series over the k in xs, with marks and k1, k2; a click on it
@@ -115,9 +135,43 @@ const LJTopo = (() => {
   function refused(status, json) {
     psd = null;
     measured = [];
+    /* nothing of the map before stays on the card */
+    api.emptyPanel("topo");
+    $("topo-k1").value = "";
+    $("topo-k2").value = "";
+    $("readout-topo-adhesion").replaceChildren();
+    $("topo-combined").hidden = true;
+    api.updateExports();
     const loose = api.placeProblem(json, "topo");
     $("readout-topo").replaceChildren(api.el("div", { class: "problem" }, `${status} ${json.title || ""}: ${json.detail || ""}`), ...loose.map((t) => api.el("div", { class: "problem" }, t)));
+    api.focusFirstInvalid();
     api.setIdle("The height map was refused: see the highlighted fields.", true);
+  }
+
+  /* A file that cannot be a height map as text (empty, or binary: an image, a native AFM
+   * format): one line, before anything is sent. null when it may be one. */
+  async function notText(f) {
+    if (f.size === 0) return `not a height map: ${f.name} is empty`;
+    const b = new Uint8Array(await f.slice(0, 4096).arrayBuffer());
+    const magic = [[[0x89, 0x50, 0x4e, 0x47], "a PNG image"], [[0xff, 0xd8, 0xff], "a JPEG image"], [[0x49, 0x49, 0x2a, 0x00], "a TIFF file"], [[0x4d, 0x4d, 0x00, 0x2a], "a TIFF file"], [[0x50, 0x4b, 0x03, 0x04], "a ZIP archive"], [[0x25, 0x50, 0x44, 0x46], "a PDF"]];
+    for (const [m, what] of magic) if (m.every((x, i) => b[i] === x)) return `not a height map: ${f.name} is ${what}; export the heights as text (one row a line)`;
+    if (b.includes(0)) return `not a height map: ${f.name} is a binary file; export the heights as text (one row a line)`;
+    return null;
+  }
+
+  async function checkFiles(files) {
+    for (const f of files) {
+      const why = await notText(f);
+      if (why) {
+        refused(422, { title: "Not a height map", detail: why, errors: [] });
+        api.showFieldError("topo-file", why);
+        $("readout-topo").replaceChildren(api.el("div", { class: "problem" }, why));
+        api.setIdle(why, true);
+        api.focusFirstInvalid();
+        return false;
+      }
+    }
+    return true;
   }
 
   /* POSTs text to endpoint (opts as api.post takes them) and records the answer in panel p:
@@ -152,6 +206,8 @@ const LJTopo = (() => {
       api.showFieldError("topo-file", "choose a file: a matrix of heights in m, one row a line");
       return;
     }
+    $("card-topo").hidden = false;
+    if (!(await checkFiles([...$("topo-file").files]))) return;
     if ($("topo-file").files.length > 1) return computeCombined([...$("topo-file").files]);
     measured = [];
     $("topo-combined").hidden = true;
@@ -166,6 +222,7 @@ const LJTopo = (() => {
     readout(psd);
     draw();
     $("readout-topo-adhesion").textContent = "Pick k1 and k2 (empty: ∞) and compute the adhesion of the spectrum between them.";
+    api.updateExports();
     api.setIdle(`PSD of ${f.name}: ${psd.k.length} bins.`);
   }
 
@@ -184,6 +241,7 @@ const LJTopo = (() => {
     const f = fitLine(c);
     if (f) series.push({ name: `fit: D = ${api.fmt(c.fit.D, 4)} ± ${api.errFmt(c.error.fit.D)}`, x: f.k, y: f.P, color: "#d1495b", dash: [6, 4] });
     const marks = c.gaps.map((g) => ({ type: "vline", x: Math.sqrt(g.k_min * g.k_max), label: "gap", color: "#d1495b", dash: [2, 3], row: 1 }));
+    marks.push(...bands(c));
     plot(series, measured.flatMap((m) => [m.answer.k[0], m.answer.k[m.answer.k.length - 1]]), marks, api.panels.topo.answers);
   }
 
@@ -254,6 +312,7 @@ const LJTopo = (() => {
     draw();
     $("topo-combined").hidden = false;
     $("readout-topo-adhesion").textContent = "Pick k1 and k2 (empty: ∞) and compute the adhesion of the combined spectrum between them.";
+    api.updateExports();
     api.setIdle(`Combined PSD of ${files.length} measurements: ${psd.k.length} points.`);
   }
 
@@ -305,6 +364,53 @@ const LJTopo = (() => {
     return out;
   }
 
+  /* The spectrum between k1 and k2 as a psd object: the server's own (with P_err and its tail)
+   * cut to them, else the bins'. */
+  function chosen(k1, k2) {
+    if (measured.length) return cut(psd.psd, k1, k2);
+    return psd.psd && psd.psd.P_err && psd.psd.k.length > 1 ? cut(psd.psd, Math.max(k1, psd.psd.k[0]), k2) : spectrum(psd, k1, k2);
+  }
+
+  /* "Use this spectrum": the chosen part of the measured PSD becomes the calculation's PSD. */
+  async function useIt() {
+    if (!psd) return;
+    api.clearErrors();
+    if (!api.materialObject()) {
+      api.showFieldError("topo-k1", "give the material (SI) above first: the spectrum is in SI and the theory needs its scales χ and σ0");
+      $("readout-topo-adhesion").textContent = "Give the material (SI) above: the spectrum is in SI and the theory needs its scales χ and σ0.";
+      api.setIdle("Give the material first.", true);
+      return;
+    }
+    const k1 = kOf("topo-k1");
+    const k2 = kOf("topo-k2");
+    if (k1 === null) {
+      api.showFieldError("topo-k1", "k1 must be a number (1/m)");
+      api.focusFirstInvalid();
+      return;
+    }
+    if (measured.length && !psd.psd) {
+      $("readout-topo-adhesion").textContent = "The combination has no psd object (see its warnings): nothing to use.";
+      return;
+    }
+    const names = measured.length ? measured.map((x) => x.name).join(" + ") : ($("topo-file").files[0] || {}).name || "measured map";
+    const label = `${names}, k ${api.fmt(k1, 4)} … ${k2 === null ? "∞" : api.fmt(k2, 4)} 1/m`;
+    $("readout-topo-adhesion").textContent = `Used as the calculation's PSD: ${label}.`;
+    await api.useSpectrum(chosen(k1, k2), label);
+  }
+
+  /* The card's CSV: the spectrum's psd object (k, P, P_err with units), which the table input
+   * of the PSD card reads back; null without one. */
+  function psdCSV() {
+    if (!psd) return null;
+    const o = psd.psd && psd.psd.k ? psd.psd : { k: psd.k, P: psd.P, P_err: psd.error && psd.error.P };
+    const lines = [`# ljgap ${measured.length ? "psd/combine" : "psd"}: the psd object (SI; k angular, 2 pi int k P dk = h_rms^2)${o.tail ? `; tail exponent ${o.tail.exponent}` : ""}`];
+    if (psd.fit) lines.push(`# fit.D = ${psd.fit.D} ± ${psd.error.fit.D}; fit band ${psd.fit.k_min} … ${psd.fit.k_max} [1/m]`);
+    if (psd.reliable) lines.push(`# reliable band ${psd.reliable.k_min} … ${psd.reliable.k_max} [1/m] (${psd.reliable.by})`);
+    lines.push(`k [1/m],P [m^4]${o.P_err ? ",P_err [m^4]" : ""}`);
+    o.k.forEach((k, i) => lines.push([k, o.P[i], ...(o.P_err ? [o.P_err[i]] : [])].join(",")));
+    return lines.join("\n") + "\n";
+  }
+
   async function computeAdhesion() {
     if (!psd) return;
     api.clearErrors();
@@ -324,7 +430,7 @@ const LJTopo = (() => {
       return;
     }
     /* several maps: the combined psd object (from the theory's k1 when the combine had the material) */
-    const body = { psd: measured.length ? cut(psd.psd, k1, k2) : spectrum(psd, k1, k2), material: m, units: "SI" };
+    const body = { psd: chosen(k1, k2), material: m, units: "SI" };
     const text = JSON.stringify(body);
     const p = api.panels.topo;
     p.requests.push({ endpoint: "adhesion", text, label: "adhesion" });
@@ -358,6 +464,7 @@ const LJTopo = (() => {
     api = helpers;
     $("topo-compute").addEventListener("click", computePsd);
     $("topo-adhesion").addEventListener("click", computeAdhesion);
+    $("topo-use").addEventListener("click", useIt);
     $("topo-file").addEventListener("change", listFiles);
     $("topo-combined-csv").addEventListener("click", () => {
       if (psd && measured.length) api.download("ljgap-topo-combined.csv", new Blob([combinedCSV()], { type: "text/csv" }));
@@ -365,5 +472,5 @@ const LJTopo = (() => {
     for (const id of ["topo-k1", "topo-k2"]) $(id).addEventListener("change", () => psd && draw());
   }
 
-  return { init, spectrum, cut, query, refused, psdObject, combinedCSV };
+  return { init, spectrum, cut, query, refused, psdObject, combinedCSV, psdCSV, notText };
 })();
