@@ -987,11 +987,6 @@ static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limit
 
 /* ---- psd: the height map ---- */
 
-static size_t topo_cap(const ljgap_limits *lim)
-{
-    return (size_t)(lim->max_topo_points > 0 ? lim->max_topo_points : LJGAP_TOPO_POINTS_DEFAULT);
-}
-
 /* The JSON matrix topography.heights into t (t->h stays NULL unless every value is good). */
 static void parse_heights(ljgap_verr *e, const cJSON *topo, const ljgap_limits *lim,
                           ljgap_topo_spec *t)
@@ -1015,10 +1010,10 @@ static void parse_heights(ljgap_verr *e, const cJSON *topo, const ljgap_limits *
     }
     ny = (size_t)cJSON_GetArraySize(H);
     nx = (size_t)cJSON_GetArraySize(H->child);
-    if (nx == 0 || nx > topo_cap(lim) / ny) {
+    if (nx == 0 || nx > ljgap_limits_topo_cap(lim) / ny) {
         ljgap_verr_add(e, "/topography/heights",
                        "%zu rows of %zu heights: give 1 to %zu heights in all", ny, nx,
-                       topo_cap(lim));
+                       ljgap_limits_topo_cap(lim));
         return;
     }
     if (!(t->h = malloc(nx * ny * sizeof *t->h))) {

@@ -8,48 +8,15 @@
 #ifndef LJGAP_HANDLER_H
 #define LJGAP_HANDLER_H
 
-#include "reply.h" /* ljgap_reply, ljgap_reply_free */
+#include "limits.h" /* ljgap_limits, ljgap_call, ljgap_param */
+#include "reply.h"  /* ljgap_reply, ljgap_reply_free */
 
 #include <stddef.h>
-
-/* Server-wide limits the handler enforces (422 naming the cap when exceeded). */
-typedef struct {
-    double max_seconds;   /* wall-time cap of one computation (default 20) */
-    long max_samples;     /* montecarlo samples cap (default 1e6) */
-    long max_points;      /* cap on g_ave points / sweep values / pdf snapshots (default 10000) */
-    long sweep_threads;   /* worker threads of one sweep (default, and when <= 0: the online
-                           * cores; 1 computes sequentially); results do not depend on it */
-    long max_topo_points; /* cap on the heights of one psd map (default, and when <= 0:
-                           * LJGAP_TOPO_POINTS_DEFAULT) */
-    long sim_threads;     /* threads of one simulation run, each computing realizations (<= 0:
-                           * the online cores); results do not depend on it. The handler starts
-                           * with 0 (the CLI's foreground run takes every core); ljgap_limits_default
-                           * gives 1 (a daemon's jobs, --job-workers of them at once, leave the
-                           * other cores to the synchronous endpoints) */
-    const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
-} ljgap_limits;
-
-void ljgap_limits_default(ljgap_limits *l);
-/* The limits used by ljgap_handle (defaults until set). Not thread-safe: call at start-up. */
-void ljgap_handler_set_limits(const ljgap_limits *l);
-
-#define LJGAP_TOPO_POINTS_DEFAULT (1L << 23) /* 8 Mi heights: a 2896² map, 64 MiB of doubles */
 
 /* Endpoint names: "adhesion", "traction", "pdf", "sweep", "contact", "psd", "psd/combine".
  * Unknown endpoint -> 404 problem. Always fills *out (status 500 with a problem body if
  * memory runs out). Thread-safe. JSON answers (ljgap_handle_call with no call). */
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out);
-
-/* How one call is driven, beyond the server-wide limits. Everything may be zero. */
-typedef struct {
-    const volatile int *cancel; /* nonzero stops this computation (503 "unavailable" problem);
-                                 * NULL: the limits' cancel flag */
-    const char *accept;         /* the request's Accept header, NULL when it has none:
-                                 * traction, pdf and sweep answer text/csv (csv.h) when it
-                                 * prefers that to application/json (accept.h); one that allows
-                                 * no form the endpoint has is a 406 problem, decided before the
-                                 * body is read. Problems are always application/problem+json. */
-} ljgap_call;
 
 /* ljgap_handle with per-call settings (call may be NULL: the same as ljgap_handle). */
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
@@ -68,12 +35,6 @@ int ljgap_handler_has(const char *endpoint);
  * /NAME); an endpoint without a text form is 404. Bodies up to LJGAP_TEXT_MAX_BYTES are meant
  * (the daemon enforces it); the map itself is capped by limits.max_topo_points. call may be
  * NULL, as for ljgap_handle_call. */
-#define LJGAP_TEXT_MAX_BYTES ((size_t)64 << 20)
-
-typedef struct {
-    const char *name;  /* query parameter name, decoded */
-    const char *value; /* its value, decoded; NULL or "" when given without one */
-} ljgap_param;
 
 void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
                        const char *body, size_t len, const ljgap_call *call, ljgap_reply *out);

@@ -82,22 +82,7 @@ static char oom_body[] = "{\"type\":\"" LJGAP_PROBLEM_BASE "out-of-memory\","
                          "\"title\":\"Out of memory\",\"status\":500,"
                          "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
 
-/* A macro, not a const object: C (and clang) needs a constant expression to start limits. */
-#define LIMITS_DEFAULT                                                                             \
-    {                                                                                              \
-        .max_seconds = 20.0, .max_samples = 1000000, .max_points = 10000, .sweep_threads = 0,      \
-        .sim_threads = 0, .cancel = NULL                                                           \
-    }
-static const ljgap_limits limits_default = LIMITS_DEFAULT;
-static ljgap_limits limits = LIMITS_DEFAULT; /* written only by ljgap_handler_set_limits */
-
-void ljgap_limits_default(ljgap_limits *l)
-{
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    *l = limits_default;
-    l->sweep_threads = n > 0 ? n : 1;
-    l->sim_threads = 1;
-}
+static ljgap_limits limits = LJGAP_LIMITS_INIT; /* written only by ljgap_handler_set_limits */
 
 void ljgap_handler_set_limits(const ljgap_limits *l)
 {
@@ -605,12 +590,6 @@ static int run_contact(job *j)
 
 #define K1_MARGIN 1.1 /* the proposed k1 keeps this factor above k0/χ, off the pole of (14) */
 #define SLOPE_WARN 3  /* an rms slope above this asks whether the units are right */
-
-static size_t topo_cap(void)
-{
-    return (size_t)(limits.max_topo_points > 0 ? limits.max_topo_points
-                                               : LJGAP_TOPO_POINTS_DEFAULT);
-}
 
 /* Does the fit stand for the spectrum up to the table's end, soundly, with an exponent below
  * -2? Then the tail continues it. Up to the end: every reliable bin above the fit's band lies
@@ -1142,7 +1121,7 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
         reply_oom(out);
         return;
     }
-    ljgap_topo_text_parse(body ? body : "", body ? len : 0, topo_cap(), &heights, &ve);
+    ljgap_topo_text_parse(body ? body : "", body ? len : 0, ljgap_limits_topo_cap(&limits), &heights, &ve);
     if (!(query = ljgap_topo_params_json(params, nparams, &ve))) ve.oom = 1;
     if (!ve.oom) ljgap_request_parse_text(query, &heights, &limits, &j.rq, &ve);
     if (ve.n || ve.oom)

@@ -1,0 +1,18 @@
+/* limits.c -- the request handler's limits (limits.h): defaults and the psd map's cap. */
+#include "limits.h"
+
+#include <unistd.h>
+
+void ljgap_limits_default(ljgap_limits *l)
+{
+    static const ljgap_limits init = LJGAP_LIMITS_INIT;
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    *l = init;
+    l->sweep_threads = n > 0 ? n : 1;
+    l->sim_threads = 1;
+}
+
+size_t ljgap_limits_topo_cap(const ljgap_limits *l)
+{
+    return (size_t)(l->max_topo_points > 0 ? l->max_topo_points : LJGAP_TOPO_POINTS_DEFAULT);
+}
