@@ -1,5 +1,6 @@
 /* answer.h -- the job and the answer builders of handler.c, for endpoints whose runner lives in
- * its own file (combine.c: POST /v1/psd/combine). Used by the handler's files only.
+ * its own file (psd.c: POST /v1/psd; combine.c: POST /v1/psd/combine). Used by the handler's
+ * files only.
  *
  * A runner gets the job with the validated request in j->rq and builds its answer in j->ans
  * through ljgap_ans_put, ljgap_ans_num and ljgap_ans_nums (handler.c's put, put_num, put_nums:
@@ -10,9 +11,25 @@
 #ifndef LJGAP_ANSWER_H
 #define LJGAP_ANSWER_H
 
+#include "reply.h"
 #include "request.h"
 
 #include <cjson/cJSON.h>
+
+#define CT_JSON "application/json"
+#define CT_PROBLEM "application/problem+json"
+#define DETAIL_LEN (LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400)
+
+/* Problem types (problems.c has the status, title and page of each). */
+#define P_MALFORMED "malformed-json"
+#define P_NOT_FOUND "not-found"
+#define P_NOT_ACCEPTABLE "not-acceptable"
+#define P_VALIDATION "validation"
+#define P_OUTSIDE "outside-model"
+#define P_CAP "cap-exceeded"
+#define P_NO_ANSWER "no-answer"
+#define P_UNAVAILABLE "unavailable"
+#define P_OOM "out-of-memory"
 
 /* One computation: the validated request and the answer being built. */
 typedef struct {
@@ -51,6 +68,33 @@ void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljga
 void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0);
 /* With a material: the answer's "si" scales (chi_m, sigma0_Pa, E_star_Pa) */
 void ljgap_ans_si(job *j);
+/* ---- the handler's replies and checks, for simreq.c ---- */
+/* The limits set at start-up (handler.h: ljgap_handler_set_limits). */
+const ljgap_limits *ljgap_handler_limits(void);
+/* 500 out-of-memory, from a body that needs no allocation. */
+void ljgap_ans_oom(ljgap_reply *out);
+/* doc as the answer, with status and ctype. */
+void ljgap_ans_reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc);
+/* A problem of type slug with detail; errors (taken; NULL: empty) is its errors[]. */
+void ljgap_ans_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors);
+/* The problem answering a failed core status st of job j. */
+void ljgap_ans_status(ljgap_reply *out, int st, const job *j);
+/* Parses and validates body for ep into j->rq: 1, or 0 with *out the problem. */
+int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out);
+/* The answer forms, JSON then CSV (accept.h picks among them). */
+extern const char *const ljgap_ans_forms[2];
+/* The form (0 JSON, 1 CSV when csv) accept prefers, or -1 with *out the 406 problem. */
+int ljgap_ans_negotiate(const char *accept, int csv, ljgap_reply *out);
+/* The answer's meta (method, elapsed_ms since t0, version, warnings, cached). */
+void ljgap_ans_meta(job *j, double t0);
+/* The summary s into obj, its errors into err_parent's member err_key. */
+void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+                       const ljgap_summary *s);
+/* prefix, then the warnings of w, into buf. */
+void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
+
+/* psd.c: the runner of psd */
+int ljgap_run_psd(job *j);
 /* combine.c: the runner of psd/combine */
 int ljgap_run_combine(job *j);
 

@@ -15,6 +15,7 @@
  * at domain.k1.
  */
 #include "answer.h"
+#include "handler.h" /* ljgap_combine_body */
 #include "ljgap_combine.h"
 
 #include <math.h>

@@ -21,13 +21,9 @@
  * its values on up to limits.sweep_threads threads; each value is independent, so the answer
  * is the sequential one.
  *
- * Simulations (the discrete model, ljgap_sim.h, and its hybrid with the theory when the request
- * has k_split) are not an endpoint of ljgap_handle: a run takes minutes.
- * ljgap_sim_request_parse validates like every endpoint (same problems) and builds the PSD;
- * ljgap_sim_request_run runs it under the caller's cancel flag, progress callback and time cap,
- * its realizations on limits.sim_threads threads, and serialises the result. The daemon runs them
- * as background jobs (jobs.c), the CLI in the foreground; ljgap_sim_status_answer answers a poll
- * of a job, with a finished job's result as CSV when Accept asks for it.
+ * Endpoints whose runner lives in its own file reach the builders here through answer.h: psd
+ * (psd.c), psd/combine (combine.c); simulations, which are not an endpoint of ljgap_handle (a run
+ * takes minutes), are parsed, run and answered in simreq.c.
  *
  * Problem types: the "type" member of every application/problem+json answer is /problems/SLUG,
  * a page the daemon serves; problems.c holds the status, title and text of each (openapi.json
@@ -62,21 +58,6 @@
 #include <string.h>
 #include <unistd.h>
 
-#define CT_JSON "application/json"
-#define CT_PROBLEM "application/problem+json"
-#define DETAIL_LEN (LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400)
-
-/* Problem types (problems.c has the status, title and page of each). */
-#define P_MALFORMED "malformed-json"
-#define P_NOT_FOUND "not-found"
-#define P_NOT_ACCEPTABLE "not-acceptable"
-#define P_VALIDATION "validation"
-#define P_OUTSIDE "outside-model"
-#define P_CAP "cap-exceeded"
-#define P_NO_ANSWER "no-answer"
-#define P_UNAVAILABLE "unavailable"
-#define P_OOM "out-of-memory"
-
 /* Sent when not even a problem can be allocated; never freed (see ljgap_reply_free). */
 static char oom_body[] = "{\"type\":\"" LJGAP_PROBLEM_BASE "out-of-memory\","
                          "\"title\":\"Out of memory\",\"status\":500,"
@@ -91,7 +72,7 @@ void ljgap_handler_set_limits(const ljgap_limits *l)
 
 /* ---- replies ---- */
 
-static void reply_oom(ljgap_reply *out)
+void ljgap_ans_oom(ljgap_reply *out)
 {
     out->status = 500;
     out->body = oom_body;
@@ -100,11 +81,11 @@ static void reply_oom(ljgap_reply *out)
 }
 
 /* Serialises doc into out; doc stays the caller's. */
-static void reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc)
+void ljgap_ans_reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc)
 {
     char *s = cJSON_PrintUnformatted(doc);
     if (!s) {
-        reply_oom(out);
+        ljgap_ans_oom(out);
         return;
     }
     out->status = status;
@@ -115,7 +96,7 @@ static void reply_json(ljgap_reply *out, int status, const char *ctype, const cJ
 
 /* A problem answer of type /problems/slug (status and title from problems.c); takes errors
  * (an array, or NULL for an empty one). */
-static void reply_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors)
+void ljgap_ans_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors)
 {
     const ljgap_problem_doc *k = ljgap_problem_find(slug);
     cJSON *p = cJSON_CreateObject();
@@ -128,10 +109,10 @@ static void reply_problem(ljgap_reply *out, const char *slug, const char *detail
         !cJSON_AddStringToObject(p, "detail", detail) ||
         !cJSON_AddItemToObject(p, "errors", errors)) {
         cJSON_Delete(errors);
-        reply_oom(out);
+        ljgap_ans_oom(out);
         goto end;
     }
-    reply_json(out, k->status, CT_PROBLEM, p);
+    ljgap_ans_reply_json(out, k->status, CT_PROBLEM, p);
 end:
     cJSON_Delete(p);
 }
@@ -139,7 +120,7 @@ end:
 void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail)
 {
     memset(out, 0, sizeof *out);
-    reply_problem(out, slug, detail, NULL);
+    ljgap_ans_problem(out, slug, detail, NULL);
 }
 
 void ljgap_reply_free(ljgap_reply *r)
@@ -219,8 +200,8 @@ static const ljgap_est *si_est_of(const ljgap_si_summary *s, size_t i)
 
 /* The adhesion fields of s into obj and their errors into a new object obj.error_key (all
  * null when s is NULL: the reason is already a warning). */
-static void put_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
-                        const ljgap_summary *s)
+void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+                       const ljgap_summary *s)
 {
     cJSON *err = cJSON_CreateObject();
     for (size_t i = 0; i < N_EST; i++) {
@@ -278,7 +259,7 @@ static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
     return si;
 }
 
-static void put_meta(job *j, double t0)
+void ljgap_ans_meta(job *j, double t0)
 {
     cJSON *meta = put(j, j->ans, "meta", cJSON_CreateObject());
     cJSON *w;
@@ -334,7 +315,7 @@ static int run_adhesion(job *j)
     ljgap_summary sum;
     int st = summarise(j, &j->rq.psd, &sum, &j->rq.warn);
     if (st) return st;
-    put_summary(j, j->ans, j->ans, "error", &sum);
+    ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
     put_si(j, j->ans, &sum);
     return LJGAP_OK;
 }
@@ -357,7 +338,7 @@ static int run_traction(job *j)
     sum_obj = put(j, j->ans, "summary", cJSON_CreateObject());
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "sigma", &sigma[0].err, rq->nx, sizeof *sigma, "error.sigma");
-    put_summary(j, sum_obj, err, "summary", &sum);
+    ljgap_ans_summary(j, sum_obj, err, "summary", &sum);
     if ((si = put_si(j, j->ans, NULL))) {
         ljgap_si_point *pt = malloc(rq->nx * sizeof *pt);
         if (!pt) {
@@ -529,7 +510,7 @@ static int run_sweep(job *j)
     for (size_t i = 0; results && i < rq->nx; i++) {
         cJSON *r = put(j, results, NULL, cJSON_CreateObject());
         if (sw.st[i]) failed++;
-        put_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
+        ljgap_ans_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
         if (sir && !sw.st[i]) {
             cJSON *sr = put(j, sir, NULL, cJSON_CreateObject());
             put_si_summary(j, sr, sr, "error", &sw.sum[i]);
@@ -561,7 +542,7 @@ static int run_contact(job *j)
                  " (the contact model needs a positive sigma_max and dgamma_eff)");
         return st == LJGAP_EINVAL ? LJGAP_EFAIL : st;
     }
-    put_summary(j, j->ans, j->ans, "error", &sum);
+    ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
     err = cJSON_GetObjectItemCaseSensitive(j->ans, "error");
     po = put(j, j->ans, "pull_off_N", cJSON_CreateObject());
     epo = put(j, err, "pull_off_N", cJSON_CreateObject());
@@ -586,267 +567,11 @@ static int run_contact(job *j)
     return LJGAP_OK;
 }
 
-/* ---- psd: a height map's PSD (issue 15, core/topo.c) ---- */
-
-#define K1_MARGIN 1.1 /* the proposed k1 keeps this factor above k0/χ, off the pole of (14) */
-#define SLOPE_WARN 3  /* an rms slope above this asks whether the units are right */
-
-/* Does the fit stand for the spectrum up to the table's end, soundly, with an exponent below
- * -2? Then the tail continues it. Up to the end: every reliable bin above the fit's band lies
- * within TAIL_BINS_SIGMA errors (and TAIL_BINS_REL) of the fitted law, so that a cutoff, a noise
- * floor or the tip's trace above the band stops the tail while a band that merely stops a bin
- * or two short of the end does not. */
-#define TAIL_BINS_SIGMA 3
-#define TAIL_BINS_REL 0.1
-static int fit_gives_tail(const ljgap_topo_result *r)
-{
-    if (!r->has_fit || !r->fit.sound || !(2 * r->fit.D.value - 8 < -2)) return 0;
-    for (size_t i = r->rel_first; i <= r->rel_last && i < r->n; i++) {
-        if (r->k[i] <= r->fit.kmax * (1 + 1e-9)) continue;
-        double law = r->fit.C.value * pow(r->k[i], 2 * r->fit.D.value - 8);
-        if (!(fabs(log(r->P[i] / law)) <= TAIL_BINS_SIGMA * r->P_err[i] / r->P[i] + TAIL_BINS_REL))
-            return 0;
-    }
-    return 1;
-}
-
-/* The psd object of a table (k, P, P_err: n knots, log-log interpolated) with the tail P ∝ k^q
- * when q is finite: /v1/psd's (put_psd_object) and /v1/psd/combine's. Its variance (with the
- * tail) into *m0 (NAN when it cannot be formed). */
-void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
-                         double q, double q_err, double *m0)
-{
-    cJSON *o = put(j, j->ans, "psd", cJSON_CreateObject());
-    int tail = isfinite(q);
-    ljgap_psd psd;
-    *m0 = NAN;
-    put(j, o, "kind", cJSON_CreateString("table"));
-    put_nums(j, o, "k", k, n, sizeof *k, "psd.k");
-    put_nums(j, o, "P", P, n, sizeof *P, "psd.P");
-    put_nums(j, o, "P_err", P_err, n, sizeof *P_err, "psd.P_err");
-    if (tail) {
-        cJSON *to = put(j, o, "tail", cJSON_CreateObject());
-        put_num(j, to, "exponent", q, "psd.tail", -1);
-        put_num(j, to, "exponent_err", q_err, "psd.tail.exponent_err", -1);
-    }
-    if (ljgap_psd_table(&psd, k, P, n, tail, tail ? q : 0) == LJGAP_OK) *m0 = psd.m0;
-    ljgap_psd_free(&psd);
-}
-
-/* The psd object for /v1/adhesion with "units":"SI": the reliable bins from k_from on as a
- * table that keeps their variance (ljgap_topo_table), with P_err and the fitted power law as
- * the tail when fit_gives_tail; the fitted power law itself from k_from when no reliable bin
- * reaches beyond it; null (and a warning) when neither can be formed. Its variance into *m0
- * (m², NAN when null). */
-static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, double *m0)
-{
-    double q = 2 * r->fit.D.value - 8;
-    int tail = fit_gives_tail(r);
-    ljgap_topo_tab t;
-    int st = ljgap_topo_table(r, k_from, tail ? q : NAN, &t);
-    cJSON *o;
-    ljgap_psd psd;
-    *m0 = NAN;
-    if (st == LJGAP_ENOMEM) {
-        j->oom = 1;
-        return;
-    }
-    if (st == LJGAP_OK) {
-        ljgap_ans_table_psd(j, t.k, t.P, t.P_err, t.n, tail ? q : NAN, 2 * r->fit.D.err, m0);
-        if (!tail)
-            ljgap_warn(
-                &j->rq.warn, "the psd object has no tail: %s, so the table ends at k = %g 1/m",
-                !r->has_fit     ? "there is no power-law fit"
-                : !r->fit.sound ? "the fit is no sound power law with 2 < D < 3"
-                                : "the bins above the fit band are no power law (a cutoff, a noise "
-                                  "floor or the tip's trace?) and are kept as measured",
-                t.k[t.n - 1]);
-    } else if (r->has_fit && r->fit.sound && q < -2) {
-        o = put(j, j->ans, "psd", cJSON_CreateObject());
-        put(j, o, "kind", cJSON_CreateString("power"));
-        put_num(j, o, "D", r->fit.D.value, "psd.D", -1);
-        put_num(j, o, "k1", k_from, "psd.k1", -1);
-        put_num(j, o, "C", r->fit.C.value, "psd.C", -1);
-        ljgap_warn(&j->rq.warn,
-                   "the theory's band starts at k1 = %g 1/m, beyond the reliable bins: the psd "
-                   "object is the fitted power law, extrapolated",
-                   k_from);
-        if (ljgap_psd_power(&psd, r->fit.D.value, k_from, INFINITY, LJGAP_LEVEL_C,
-                            r->fit.C.value) == LJGAP_OK)
-            *m0 = psd.m0;
-    } else {
-        put(j, j->ans, "psd", cJSON_CreateNull());
-        ljgap_warn(&j->rq.warn,
-                   "no psd object: no reliable bin lies above k = %g 1/m and the "
-                   "fit gives no sound power law with 2 < D < 3 to extrapolate",
-                   k_from);
-    }
-    ljgap_topo_tab_free(&t);
-}
-
-/* With a material: where the band [kf, kl] (its name: "reliable band", ...) lies against the
- * theory's k > k0/χ and the k1 it proposes (kf, or K1_MARGIN k0/χ when that is higher) into
- * d and the answer's "domain"; the caller then writes the psd object from d->k1 and ends with
- * ljgap_ans_domain_end and the object's variance. /v1/psd's and /v1/psd/combine's. */
-void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap_domain *d)
-{
-    const ljgap_material *m = &j->rq.mat;
-    double chi = ljgap_units_chi(m);
-    d->kd = ljgap_k0() / chi;
-    d->kf = kf;
-    d->kl = kl;
-    d->band = band;
-    d->k1 = fmax(kf, K1_MARGIN * d->kd);
-    d->inside = kl <= d->kd ? 0 : kf > d->kd ? 1 : log(kl / d->kd) / log(kl / kf);
-    d->obj = put(j, j->ans, "domain", cJSON_CreateObject());
-    put_num(j, d->obj, "k0", d->kd, "domain.k0", -1);
-    put(j, d->obj, "inside",
-        cJSON_CreateString(d->inside == 1   ? "all"
-                           : d->inside == 0 ? "none"
-                                            : "part"));
-    put_num(j, d->obj, "fraction", d->inside, "domain.fraction", -1);
-    put_num(j, d->obj, "k1", d->k1, "domain.k1", -1);
-    put_num(j, d->obj, "k1_dimensionless", d->k1 * chi, "domain.k1_dimensionless", -1);
-}
-
-void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0)
-{
-    if (isfinite(m0)) {
-        put_num(j, d->obj, "h_rms", sqrt(m0), "domain.h_rms", -1);
-        put_num(j, d->obj, "m0_dimensionless", ljgap_units_var_to_dimless(&j->rq.mat, m0),
-                "domain.m0_dimensionless", -1);
-    } else {
-        put(j, d->obj, "h_rms", cJSON_CreateNull());
-        put(j, d->obj, "m0_dimensionless", cJSON_CreateNull());
-    }
-    if (d->inside < 1)
-        ljgap_warn(&j->rq.warn,
-                   "%s of the %s (k = %g to %g 1/m) lies below k0/χ = %g 1/m, "
-                   "outside the theory's domain: the psd object starts at k1 = %g 1/m",
-                   d->inside == 0 ? "all" : "part", d->band, d->kf, d->kl, d->kd, d->k1);
-}
+/* ---- for psd.c and combine.c ---- */
 
 void ljgap_ans_si(job *j)
 {
     put_si(j, j->ans, NULL);
-}
-
-/* With a material: the domain of the reliable band and the psd object from its k1. */
-static void put_domain(job *j, const ljgap_topo_result *r)
-{
-    ljgap_domain d;
-    double m0;
-    ljgap_ans_domain_begin(j, r->rel_kmin, r->k[r->rel_last], "reliable band", &d);
-    put_psd_object(j, r, d.k1, &m0);
-    ljgap_ans_domain_end(j, &d, m0);
-}
-
-static int run_psd(job *j)
-{
-    ljgap_topo_spec *t = &j->rq.topo;
-    ljgap_topo_grid g = {t->nx, t->ny, t->dx, t->dy, t->periodic};
-    ljgap_topo_opts o;
-    ljgap_topo_result r;
-    cJSON *err, *grid, *fit, *efit, *pr, *rel;
-    double m0;
-    int st;
-    ljgap_topo_opts_default(&o);
-    o.cancel = j->cancel;
-    o.fit_kmin = t->fit_kmin;
-    o.fit_kmax = t->fit_kmax;
-    o.detrend = (ljgap_topo_detrend)t->detrend;
-    o.tip_radius = t->tip_radius;
-    o.resolution = t->resolution;
-    st = ljgap_topo_compute(t->h, &g, &o, &r, &j->rq.warn);
-    free(t->h); /* a large map: the answer needs the bins only */
-    t->h = NULL;
-    if (st == LJGAP_EINVAL || st == LJGAP_EFAIL) {
-        j->bad_ptr = "/topography/heights";
-        j->bad_head = "the height map cannot be analysed";
-        return LJGAP_EINVAL;
-    }
-    if (st) return st;
-    put_nums(j, j->ans, "k", r.k, r.n, sizeof *r.k, "k");
-    put_nums(j, j->ans, "P", r.P, r.n, sizeof *r.P, "P");
-    put_nums(j, j->ans, "modes", r.modes, r.n, sizeof *r.modes, "modes");
-    put_num(j, j->ans, "h_rms", r.h_rms.value, "h_rms", -1);
-    put_num(j, j->ans, "rms_slope", r.rms_slope.value, "rms_slope", -1);
-    grid = put(j, j->ans, "grid", cJSON_CreateObject());
-    put(j, grid, "nx", cJSON_CreateNumber((double)t->nx));
-    put(j, grid, "ny", cJSON_CreateNumber((double)t->ny));
-    put_num(j, grid, "dx", t->dx, "grid.dx", -1);
-    put_num(j, grid, "dy", t->dy, "grid.dy", -1);
-    put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
-    put(j, grid, "profile", cJSON_CreateBool(r.profile));
-    put(j, grid, "detrend",
-        cJSON_CreateString(r.profile && r.detrend == LJGAP_DETREND_PLANE
-                               ? "line"
-                               : ljgap_topo_detrend_name(r.detrend)));
-    put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
-    put_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
-    put_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
-    rel = put(j, j->ans, "reliable", cJSON_CreateObject());
-    put_num(j, rel, "k_min", r.rel_kmin, "reliable.k_min", -1);
-    put_num(j, rel, "k_max", r.rel_kmax, "reliable.k_max", -1);
-    put(j, rel, "by",
-        cJSON_CreateString(r.rel_by == LJGAP_RELIABLE_TIP          ? "tip"
-                           : r.rel_by == LJGAP_RELIABLE_RESOLUTION ? "resolution"
-                           : r.rel_by == LJGAP_RELIABLE_NOISE      ? "noise"
-                                                                   : "nyquist"));
-    err = put(j, j->ans, "error", cJSON_CreateObject());
-    put_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
-    put_num(j, err, "h_rms", r.h_rms.err, "error.h_rms", -1);
-    put_num(j, err, "rms_slope", r.rms_slope.err, "error.rms_slope", -1);
-    if (r.has_fit) {
-        fit = put(j, j->ans, "fit", cJSON_CreateObject());
-        efit = put(j, err, "fit", cJSON_CreateObject());
-        put_num(j, fit, "D", r.fit.D.value, "fit.D", -1);
-        put_num(j, fit, "H", 3 - r.fit.D.value, "fit.H", -1);
-        put_num(j, fit, "C", r.fit.C.value, "fit.C", -1);
-        put_num(j, fit, "k_min", r.fit.kmin, "fit.k_min", -1);
-        put_num(j, fit, "k_max", r.fit.kmax, "fit.k_max", -1);
-        put(j, fit, "bins", cJSON_CreateNumber((double)r.fit.bins));
-        put_num(j, fit, "chi2_red", r.fit.chi2_red, "fit.chi2_red", -1);
-        put_num(j, fit, "corr_lnC_D", r.fit.corr, "fit.corr_lnC_D", -1);
-        put(j, fit, "band", cJSON_CreateString(r.fit.given ? "given" : "detected"));
-        put(j, fit, "sound", cJSON_CreateBool(r.fit.sound));
-        put_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
-        put_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
-        put_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);
-        if (r.fit.noise_floor > 0) { /* a white floor fitted with the law (m⁴) */
-            put_num(j, fit, "noise_floor", r.fit.noise_floor, "fit.noise_floor", -1);
-            put_num(j, efit, "noise_floor", r.fit.noise_floor_err, "error.fit.noise_floor", -1);
-        } else {
-            put(j, fit, "noise_floor", cJSON_CreateNull());
-            put(j, efit, "noise_floor", cJSON_CreateNull());
-        }
-    } else {
-        put(j, j->ans, "fit", cJSON_CreateNull());
-        put(j, err, "fit", cJSON_CreateNull());
-    }
-    if (r.profile) {
-        pr = put(j, j->ans, "profile", cJSON_CreateObject());
-        put_nums(j, pr, "PP", r.PP, r.n, sizeof *r.PP, "profile.PP");
-        put_num(j, pr, "alpha", r.alpha.value, "profile.alpha", -1);
-        pr = put(j, err, "profile", cJSON_CreateObject());
-        put_nums(j, pr, "PP", r.PP_err, r.n, sizeof *r.PP_err, "error.profile.PP");
-        put_num(j, pr, "alpha", r.alpha.err, "error.profile.alpha", -1);
-        ljgap_warn(&j->rq.warn,
-                   "one profile: its 1-D PSD PP ∝ k^-%.3g was turned into the isotropic PSD P = "
-                   "F(α) PP/k, which assumes an isotropic surface",
-                   r.alpha.value);
-    }
-    if (r.rms_slope.value > SLOPE_WARN)
-        ljgap_warn(&j->rq.warn,
-                   "the rms slope is %.3g: are the heights and dx, dy in metres (the same unit)?",
-                   r.rms_slope.value);
-    if (j->rq.has_material)
-        put_domain(j, &r);
-    else
-        put_psd_object(j, &r, 0, &m0);
-    put_si(j, j->ans, NULL);
-    ljgap_topo_result_free(&r);
-    return LJGAP_OK;
 }
 
 /* ---- routing ---- */
@@ -863,7 +588,7 @@ static const route routes[] = {
     {"pdf", LJGAP_EP_PDF, run_pdf},
     {"sweep", LJGAP_EP_SWEEP, run_sweep},
     {"contact", LJGAP_EP_CONTACT, run_contact},
-    {"psd", LJGAP_EP_PSD, run_psd},
+    {"psd", LJGAP_EP_PSD, ljgap_run_psd},
     {"psd/combine", LJGAP_EP_COMBINE, ljgap_run_combine},
 };
 
@@ -880,7 +605,7 @@ int ljgap_handler_has(const char *endpoint)
 }
 
 /* "; "-joined warnings after prefix into buf. */
-static void join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
+void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
 {
     size_t used = (size_t)snprintf(buf, size, "%s", prefix);
     for (int i = 0; i < w->n && used < size; i++)
@@ -888,15 +613,15 @@ static void join_warnings(char *buf, size_t size, const char *prefix, const ljga
 }
 
 /* The problem for a failed core status. */
-static void reply_status(ljgap_reply *out, int st, const job *j)
+void ljgap_ans_status(ljgap_reply *out, int st, const job *j)
 {
     char detail[DETAIL_LEN], head[DETAIL_LEN + 200];
     cJSON *errors = NULL, *e = NULL;
     switch (st) {
     case LJGAP_EINVAL:
-        join_warnings(detail, sizeof detail,
-                      j->bad_head ? j->bad_head : "the PSD is outside the model's domain",
-                      &j->rq.warn);
+        ljgap_ans_join_warnings(detail, sizeof detail,
+                                j->bad_head ? j->bad_head : "the PSD is outside the model's domain",
+                                &j->rq.warn);
         errors = cJSON_CreateArray();
         e = cJSON_CreateObject();
         if (!errors || !e ||
@@ -904,10 +629,10 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
             !cJSON_AddStringToObject(e, "detail", detail) || !cJSON_AddItemToArray(errors, e)) {
             cJSON_Delete(e);
             cJSON_Delete(errors);
-            reply_oom(out);
+            ljgap_ans_oom(out);
             return;
         }
-        reply_problem(out, P_OUTSIDE, detail, errors);
+        ljgap_ans_problem(out, P_OUTSIDE, detail, errors);
         return;
     case LJGAP_ECAP:
         snprintf(head, sizeof head,
@@ -915,22 +640,22 @@ static void reply_status(ljgap_reply *out, int st, const job *j)
                  "(max_seconds = %g s of wall time per request, max_work = %ld grid "
                  "point-steps); ask for a larger tol or fewer points%s",
                  limits.max_seconds, j->rq.opts.max_work, j->fail);
-        join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, P_CAP, detail, NULL);
+        ljgap_ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        ljgap_ans_problem(out, P_CAP, detail, NULL);
         return;
     case LJGAP_EFAIL:
         snprintf(head, sizeof head, "no finite answer could be formed%s", j->fail);
-        join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, P_NO_ANSWER, detail, NULL);
+        ljgap_ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        ljgap_ans_problem(out, P_NO_ANSWER, detail, NULL);
         return;
     case LJGAP_ECANCEL:
-        reply_problem(out, P_UNAVAILABLE,
-                      "the computation was cancelled (the server is "
-                      "shutting down); try again",
-                      NULL);
+        ljgap_ans_problem(out, P_UNAVAILABLE,
+                          "the computation was cancelled (the server is "
+                          "shutting down); try again",
+                          NULL);
         return;
     default:
-        reply_oom(out);
+        ljgap_ans_oom(out);
         return;
     }
 }
@@ -963,7 +688,7 @@ static void reply_invalid(ljgap_reply *out, ljgap_verr *ve)
 {
     char detail[DETAIL_LEN];
     if (ve->oom) {
-        reply_oom(out);
+        ljgap_ans_oom(out);
         return;
     }
     if (ve->n > LJGAP_MAX_ERRORS)
@@ -974,13 +699,13 @@ static void reply_invalid(ljgap_reply *out, ljgap_verr *ve)
     else
         snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve->n,
                  ve->n == 1 ? "" : "s");
-    reply_problem(out, P_VALIDATION, detail, ve->errors);
+    ljgap_ans_problem(out, P_VALIDATION, detail, ve->errors);
     ve->errors = NULL; /* reply_problem took it */
 }
 
 /* Parses body and validates it as a request to ep into j->rq. Returns 1 when it is valid;
  * else 0 with the problem (400, 422 or 500) in *out. j->rq is left for ljgap_request_free. */
-static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out)
+int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out)
 {
     cJSON *root = NULL;
     ljgap_verr ve = {0};
@@ -992,11 +717,11 @@ static int validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljg
                  "the body is not one valid JSON value in UTF-8 (error at byte "
                  "%zu of %zu)",
                  where, len);
-        reply_problem(out, P_MALFORMED, detail, NULL);
+        ljgap_ans_problem(out, P_MALFORMED, detail, NULL);
         goto end;
     }
     if (!(ve.errors = cJSON_CreateArray())) {
-        reply_oom(out);
+        ljgap_ans_oom(out);
         goto end;
     }
     if (ljgap_request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
@@ -1011,27 +736,27 @@ end:
 }
 
 /* The media types an answer can take: JSON always, CSV where csv.h has a form for it. */
-static const char *const forms[] = {CT_JSON, "text/csv"};
+const char *const ljgap_ans_forms[2] = {CT_JSON, "text/csv"};
 
 /* Which form the Accept header asks for: 0 JSON, 1 CSV (only when csv is nonzero), or -1 with
  * the 406 problem in *out. */
-static int negotiate(const char *accept, int csv, ljgap_reply *out)
+int ljgap_ans_negotiate(const char *accept, int csv, ljgap_reply *out)
 {
-    int k = ljgap_accept_pick(accept, forms, csv ? 2 : 1);
+    int k = ljgap_accept_pick(accept, ljgap_ans_forms, csv ? 2 : 1);
     if (k < 0)
-        reply_problem(out, P_NOT_ACCEPTABLE,
-                      csv ? "the Accept header allows neither application/json nor text/csv, "
-                            "the forms this answer has; ask for one of them or send no Accept"
-                          : "the Accept header does not allow application/json, the one form "
-                            "this answer has; ask for it or send no Accept",
-                      NULL);
+        ljgap_ans_problem(out, P_NOT_ACCEPTABLE,
+                          csv ? "the Accept header allows neither application/json nor text/csv, "
+                                "the forms this answer has; ask for one of them or send no Accept"
+                              : "the Accept header does not allow application/json, the one form "
+                                "this answer has; ask for it or send no Accept",
+                          NULL);
     return k;
 }
 
 /* The form of endpoint's answer that call's Accept header asks for (negotiate). */
 static int form_of(const char *endpoint, const ljgap_call *call, ljgap_reply *out)
 {
-    return negotiate(call ? call->accept : NULL, ljgap_csv_offers(endpoint), out);
+    return ljgap_ans_negotiate(call ? call->accept : NULL, ljgap_csv_offers(endpoint), out);
 }
 
 /* Runs a validated request and answers it in form (0 JSON, 1 the CSV of endpoint; j->rq is
@@ -1043,18 +768,18 @@ static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
     j->deadline = t0 + limits.max_seconds;
     j->cancel = call && call->cancel ? call->cancel : limits.cancel;
     if (!(j->ans = cJSON_CreateObject())) {
-        reply_oom(out);
+        ljgap_ans_oom(out);
         return;
     }
     st = run(j);
-    if (!st) put_meta(j, t0);
+    if (!st) ljgap_ans_meta(j, t0);
     if (!st && j->oom) st = LJGAP_ENOMEM;
     if (st)
-        reply_status(out, st, j);
+        ljgap_ans_status(out, st, j);
     else if (form == 0)
-        reply_json(out, 200, CT_JSON, j->ans);
+        ljgap_ans_reply_json(out, 200, CT_JSON, j->ans);
     else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
-        reply_oom(out);
+        ljgap_ans_oom(out);
     cJSON_Delete(j->ans);
     j->ans = NULL;
 }
@@ -1081,11 +806,12 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
                  "traction, pdf, sweep, contact, psd and psd/combine",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        reply_problem(out, P_NOT_FOUND, detail, NULL);
+        ljgap_ans_problem(out, P_NOT_FOUND, detail, NULL);
         goto end;
     }
     if ((form = form_of(r->name, call, out)) < 0) goto end;
-    if (validate(r->ep, body, len, &j, out)) run_job(&j, r->run, r->name, form, call, t0, out);
+    if (ljgap_ans_validate(r->ep, body, len, &j, out))
+        run_job(&j, r->run, r->name, form, call, t0, out);
 end:
     ljgap_request_free(&j.rq);
 }
@@ -1113,197 +839,34 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
                  "text/csv; the other endpoints take JSON",
                  endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        reply_problem(out, P_NOT_FOUND, detail, NULL);
+        ljgap_ans_problem(out, P_NOT_FOUND, detail, NULL);
         return;
     }
     if ((form = form_of(endpoint, call, out)) < 0) return;
     if (!(ve.errors = cJSON_CreateArray())) {
-        reply_oom(out);
+        ljgap_ans_oom(out);
         return;
     }
-    ljgap_topo_text_parse(body ? body : "", body ? len : 0, ljgap_limits_topo_cap(&limits), &heights, &ve);
+    ljgap_topo_text_parse(body ? body : "", body ? len : 0, ljgap_limits_topo_cap(&limits),
+                          &heights, &ve);
     if (!(query = ljgap_topo_params_json(params, nparams, &ve))) ve.oom = 1;
     if (!ve.oom) ljgap_request_parse_text(query, &heights, &limits, &j.rq, &ve);
     if (ve.n || ve.oom)
         reply_invalid(out, &ve);
     else
-        run_job(&j, run_psd, endpoint, form, call, t0, out);
+        run_job(&j, ljgap_run_psd, endpoint, form, call, t0, out);
     cJSON_Delete(query);
     cJSON_Delete(ve.errors);
     free(heights.h);
     ljgap_request_free(&j.rq);
 }
 
-/* ---- simulations (ljgap_sim.h) ---- */
-
-struct ljgap_sim_request {
-    job j;         /* the validated request (j.rq) and, while it runs, the answer */
-    ljgap_psd psd; /* built from j.rq.psd at parse time */
-};
-
-ljgap_sim_request *ljgap_sim_request_parse(const char *body, size_t len, ljgap_reply *out)
-{
-    ljgap_sim_request *sr = calloc(1, sizeof *sr);
-    ljgap_verr ve = {0};
-    int st;
-    memset(out, 0, sizeof *out);
-    if (!sr) {
-        reply_oom(out);
-        return NULL;
-    }
-    if (!validate(LJGAP_EP_SIMULATION, body, len, &sr->j, out)) goto fail;
-    st = ljgap_psd_from_spec(&sr->psd, &sr->j.rq.psd);
-    if (st == LJGAP_OK && sr->psd.m0 > 0 && sr->psd.m0 <= LJGAP_M0_MAX) return sr;
-    if (st == LJGAP_ENOMEM || !(ve.errors = cJSON_CreateArray())) {
-        reply_oom(out);
-        goto fail;
-    }
-    ljgap_verr_add(&ve, "/psd", "the PSD's variance m0 = %g is outside (0, %g]",
-                   st == LJGAP_OK ? sr->psd.m0 : NAN, LJGAP_M0_MAX);
-    if (ve.oom)
-        reply_oom(out);
-    else
-        reply_problem(out, P_VALIDATION, "1 problem in the request: see errors", ve.errors);
-    ve.errors = NULL;
-fail:
-    cJSON_Delete(ve.errors);
-    ljgap_sim_request_free(sr);
-    return NULL;
-}
-
-/* The result object of a run (api.md "simulations"). */
-static void put_sim_result(job *j, const ljgap_sim_result *r, double t0)
-{
-    cJSON *jump, *err;
-    size_t n = r->n_gap;
-    put_nums(j, j->ans, "g_ave", r->g_ave, n, sizeof *r->g_ave, "g_ave");
-    put_nums(j, j->ans, "sigma", r->sigma, n, sizeof *r->sigma, "sigma");
-    put_nums(j, j->ans, "sigma_std", r->sigma_std, n, sizeof *r->sigma_std, "sigma_std");
-    put_nums(j, j->ans, "sigma_out", r->sigma_out, n, sizeof *r->sigma_out, "sigma_out");
-    put_nums(j, j->ans, "residual", r->residual, n, sizeof *r->residual, "residual");
-    jump = put(j, j->ans, "jump", cJSON_CreateArray());
-    for (size_t i = 0; jump && i < n; i++)
-        put(j, jump, NULL, cJSON_CreateBool(r->jump[i]));
-    put_nums(j, j->ans, "m0_realized", r->m0_realized, (size_t)r->realizations,
-             sizeof *r->m0_realized, "m0_realized");
-    put_num(j, j->ans, "m0", r->m0_target, "m0", -1);
-    put_num(j, j->ans, "m0_grid", r->m0_grid, "m0_grid", -1);
-    put_num(j, j->ans, "L", r->L, "L", -1);
-    put(j, j->ans, "n", cJSON_CreateNumber(r->n));
-    put(j, j->ans, "realizations", cJSON_CreateNumber(r->realizations));
-    put(j, j->ans, "seed", cJSON_CreateNumber((double)j->rq.sim.seed));
-    put(j, j->ans, "tol", cJSON_CreateNumber(j->rq.sim.tol));
-    put(j, j->ans, "elapsed_ms", cJSON_CreateNumber((ljgap_now() - t0) * 1e3));
-    err = put(j, j->ans, "error", cJSON_CreateObject());
-    put_nums(j, err, "sigma", r->sigma_err, n, sizeof *r->sigma_err, "error.sigma");
-    if (r->k_split > 0) { /* the hybrid: the fine band and its modified law */
-        cJSON *fine;
-        put_num(j, j->ans, "k_split", r->k_split, "k_split", -1);
-        fine = put(j, j->ans, "fine", cJSON_CreateObject());
-        put_summary(j, fine, fine, "error", &r->fine);
-        put_num(j, fine, "law_error", r->law_err, "fine.law_error", -1);
-    }
-}
-
-void ljgap_sim_request_run(ljgap_sim_request *sr, const ljgap_sim_control *ctl, ljgap_reply *out)
-{
-    double t0 = ljgap_now();
-    job *j = &sr->j;
-    ljgap_sim_opts o = j->rq.sim;
-    ljgap_sim_result res;
-    char head[DETAIL_LEN + 200], detail[DETAIL_LEN];
-    int st;
-    memset(out, 0, sizeof *out);
-    memset(&res, 0, sizeof res);
-    long th = limits.sim_threads > 0 ? limits.sim_threads : sysconf(_SC_NPROCESSORS_ONLN);
-    o.threads = th < 1 ? 1 : th > LJGAP_SIM_THREADS_MAX ? LJGAP_SIM_THREADS_MAX : (int)th;
-    if (ctl) {
-        if (ctl->max_seconds > 0) o.max_seconds = ctl->max_seconds;
-        o.cancel = ctl->cancel;
-        o.progress = ctl->progress;
-        o.progress_ctx = ctl->progress_ctx;
-    }
-    st = ljgap_sim_run(&sr->psd, &o, j->rq.x, j->rq.nx, &res, &j->rq.warn);
-    if (!st && !(j->ans = cJSON_CreateObject())) st = LJGAP_ENOMEM;
-    if (!st) {
-        put_sim_result(j, &res, t0);
-        put_meta(j, t0);
-        if (j->oom) st = LJGAP_ENOMEM;
-    }
-    if (!st) {
-        reply_json(out, 200, CT_JSON, j->ans);
-    } else if (st == LJGAP_ECAP) {
-        snprintf(head, sizeof head,
-                 "the simulation needs more than the cap of %g s of wall time for one run; "
-                 "ask for a smaller n, fewer realizations or fewer mean gaps",
-                 o.max_seconds);
-        join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        reply_problem(out, P_CAP, detail, NULL);
-    } else if (st == LJGAP_ECANCEL) {
-        reply_problem(out, P_UNAVAILABLE,
-                      "the simulation was cancelled before it finished (DELETE, Ctrl-C, or the "
-                      "server shutting down)",
-                      NULL);
-    } else {
-        reply_status(out, st, j);
-    }
-    cJSON_Delete(j->ans);
-    j->ans = NULL;
-    ljgap_sim_result_free(&res);
-}
-
-void ljgap_sim_request_free(ljgap_sim_request *sr)
-{
-    if (!sr) return;
-    ljgap_psd_free(&sr->psd);
-    ljgap_request_free(&sr->j.rq);
-    free(sr);
-}
-
-void ljgap_sim_status_answer(const char *status_json, int http_status, const char *accept,
-                             ljgap_reply *out)
-{
-    cJSON *doc = NULL;
-    const char *state;
-    char detail[200];
-    int form;
-    memset(out, 0, sizeof *out);
-    if ((form = negotiate(accept, 1, out)) < 0) return;
-    if (form == 1) {
-        doc = cJSON_Parse(status_json);
-        if (!doc) {
-            reply_oom(out);
-            return;
-        }
-        state = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(doc, "status"));
-        if (state && strcmp(state, "done") == 0) {
-            if (ljgap_csv_render("simulations", cJSON_GetObjectItemCaseSensitive(doc, "result"), 0,
-                                 out) != 0)
-                reply_oom(out);
-            goto end;
-        }
-        if (ljgap_accept_pick(accept, forms, 1) < 0) { /* only CSV will do */
-            snprintf(detail, sizeof detail,
-                     "the job is %.20s: its result is there as text/csv once it is done; until "
-                     "then ask for application/json too (Accept: text/csv, "
-                     "application/json;q=0.5)",
-                     state ? state : "not done");
-            reply_problem(out, P_NOT_ACCEPTABLE, detail, NULL);
-            goto end;
-        }
-    }
-    if (!(out->body = strdup(status_json))) {
-        reply_oom(out);
-        goto end;
-    }
-    out->status = http_status;
-    out->len = strlen(out->body);
-    out->content_type = CT_JSON;
-end:
-    cJSON_Delete(doc);
-}
-
 /* ---- for endpoints run in their own files (answer.h) ---- */
+
+const ljgap_limits *ljgap_handler_limits(void)
+{
+    return &limits;
+}
 
 cJSON *ljgap_ans_put(job *j, cJSON *parent, const char *key, cJSON *item)
 {
