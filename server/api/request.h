@@ -155,6 +155,21 @@ int ljgap_v_num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x);
 /* A JSON array of min..max entries; its size, or 0 after recording why not. */
 size_t ljgap_v_array(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                      const char *what);
+/* obj[name], or NULL. */
+const cJSON *ljgap_v_member(const cJSON *obj, const char *name);
+/* A finite positive JSON number at it into *x; 0 after recording why not. */
+int ljgap_v_num_pos(ljgap_verr *e, const cJSON *it, const char *ptr, double *x);
+/* Is x (what, at ptr) within [lo, hi], the range the core handles? 0 after recording why not. */
+int ljgap_v_in_core_range(ljgap_verr *e, const char *ptr, const char *what, double x, double lo,
+                          double hi);
+/* The index in names (NULL-terminated) of the string at it, or -1 after recording why not. */
+int ljgap_v_pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *const *names,
+                 const char *field, const char *what);
+/* The request's material block into rq (need: it must be there). */
+void ljgap_v_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq);
+/* request_topo.c: a psd request (text: the matrix came as text, already in rq->topo). */
+void ljgap_request_parse_psd(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
+                             ljgap_request *rq);
 
 /* ---- combine.c: POST /v1/psd/combine ---- */
 /* Validates root's {"psds": [...], "points_per_decade"} into rq->combine. */
