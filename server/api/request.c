@@ -34,8 +34,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PSD_TABLE_MAX 10000
-#define SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
 /* Physical ranges of the material block and the contact sphere (SI). Far beyond any solid, but
  * bounded: with E*, Δγ, ε and R anywhere in double range, the contact answer's Tabor
  * parameters and Maugis-Dugdale error under- or overflowed to NaN (found by the fuzzer). */
@@ -57,9 +55,6 @@ static const char *const material_fields[] = {"E_star", "E1",     "nu1",     "E2
 static const char *const traction_fields[] = {"g_ave", NULL};
 static const char *const pdf_fields[] = {"g_ave", "k2", "grid", NULL};
 static const char *const sweep_fields[] = {"vary", "values", NULL};
-static const char *const power_fields[] = {"kind", "D", "H", "k1", "k2", "C", "m0", "h_rms", NULL};
-static const char *const table_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
-static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 static const char *const range_fields[] = {"min", "max", "n", NULL};
 /* A simulation takes the dimensionless psd and its own fields only (no method, material). */
 static const char *const sim_fields[] = {"psd", "n",       "L", "realizations", "seed", "g_ave",
@@ -338,217 +333,6 @@ static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double 
     return ok;
 }
 
-/* Level field of a power law: exactly one of C, m0, h_rms (in SI when mat is not NULL). */
-static void parse_level(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
-                        ljgap_psd_spec *s)
-{
-    static const char *const names[] = {"C", "m0", "h_rms"};
-    static const ljgap_level kinds[] = {LJGAP_LEVEL_C, LJGAP_LEVEL_M0, LJGAP_LEVEL_HRMS};
-    int found = 0;
-    for (int i = 0; i < 3; i++) {
-        const cJSON *it = member(psd, names[i]);
-        char ptr[PTR_LEN];
-        if (!it) continue;
-        snprintf(ptr, sizeof ptr, "/psd/%s", names[i]);
-        if (found++) {
-            ljgap_verr_add(e, ptr, "the level is set twice: give only one of C, m0, h_rms");
-            continue;
-        }
-        s->level = kinds[i];
-        if (!num_pos(e, it, ptr, &s->level_val) || !mat) continue;
-        if (s->level == LJGAP_LEVEL_C) {
-            s->c_si = 1;
-            s->mat = *mat;
-        } else if (s->level == LJGAP_LEVEL_M0) {
-            s->level_val = ljgap_units_var_to_dimless(mat, s->level_val);
-        } else {
-            s->level_val = ljgap_units_len_to_dimless(mat, s->level_val);
-        }
-    }
-    /* level_val > 0: it was read (or num_pos has already said why not) */
-    if (found && s->level_val > 0 && s->level == LJGAP_LEVEL_M0)
-        in_core_range(e, "/psd/m0", "m0 (in units of ε²)", s->level_val, 0, LJGAP_M0_MAX);
-    else if (found && s->level_val > 0 && s->level == LJGAP_LEVEL_HRMS)
-        in_core_range(e, "/psd/h_rms", "h_rms (in units of ε)", s->level_val, 0,
-                      sqrt(LJGAP_M0_MAX));
-    if (!found)
-        ljgap_verr_add(e, "/psd",
-                       "no level field: give exactly one of C, m0 (= 2π∫kP dk), "
-                       "h_rms (= √m0)");
-}
-
-static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
-                        ljgap_psd_spec *s)
-{
-    const cJSON *D = member(psd, "D"), *H = member(psd, "H"), *k1, *k2;
-    double chi = mat ? ljgap_units_chi(mat) : 1;
-    int k1_ok;
-    only_fields(e, psd, "/psd", power_fields, NULL);
-    if (D && H) {
-        ljgap_verr_add(e, "/psd/H", "give D or H (D = 3 - H), not both");
-    } else if (D) {
-        if (num(e, D, "/psd/D", &s->D)) check_D(e, "/psd/D", s->D, NULL);
-    } else if (H) {
-        double h;
-        if (num(e, H, "/psd/H", &h)) check_D(e, "/psd/H", s->D = 3.0 - h, &h);
-    } else {
-        ljgap_verr_add(e, "/psd/D", "missing required field \"D\" (or H = 3 - D)");
-    }
-    k1 = required(e, psd, "/psd", "k1", "the lowest wavenumber of the PSD");
-    k1_ok = k1 && check_k1(e, k1, "/psd/k1", chi, &s->k1);
-    if (k1_ok) k1_ok = in_core_range(e, "/psd/k1", "k1 (in units of 1/χ)", s->k1, 0, LJGAP_K_MAX);
-    if (!k1_ok) s->k1 = NAN; /* so later checks against k1 do not pile up */
-    k2 = member(psd, "k2");
-    s->k2 = INFINITY;
-    if (k2 && !cJSON_IsNull(k2)) {
-        if (!num_pos(e, k2, "/psd/k2", &s->k2))
-            s->k2 = NAN;
-        else if (k1_ok && !(s->k2 * chi > s->k1))
-            ljgap_verr_add(e, "/psd/k2", "k2 = %g must be greater than k1 = %g", s->k2,
-                           s->k1 / chi);
-        s->k2 *= chi;
-        if (isfinite(s->k2))
-            in_core_range(e, "/psd/k2", "k2 (in units of 1/χ; null for ∞)", s->k2, 0, LJGAP_K_MAX);
-    }
-    parse_level(e, psd, mat, s);
-}
-
-/* Numbers of a table column (pointer base) into a new array of n entries. */
-static double *table_column(ljgap_verr *e, const cJSON *arr, const char *base, size_t n)
-{
-    double *x = malloc(n * sizeof *x);
-    const cJSON *it;
-    size_t i = 0;
-    char ptr[PTR_LEN];
-    if (!x) {
-        e->oom = 1;
-        return NULL;
-    }
-    cJSON_ArrayForEach(it, arr)
-    {
-        snprintf(ptr, sizeof ptr, "%s/%zu", base, i);
-        if (!num_pos(e, it, ptr, &x[i])) x[i] = NAN;
-        i++;
-    }
-    return x;
-}
-
-/* The table's optional P_err: one standard error per P, each finite and >= 0, converted like P
- * (the computation does not use them yet; a later step propagates them). */
-static void parse_table_errors(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
-                               size_t nP, ljgap_psd_spec *s)
-{
-    const cJSON *pe = member(psd, "P_err"), *it;
-    char ptr[PTR_LEN];
-    size_t i = 0, ne;
-    if (!pe) return;
-    ne = array_of(e, pe, "/psd/P_err", 2, PSD_TABLE_MAX, "the standard errors of P");
-    if (ne == 0) return;
-    if (nP > 0 && ne != nP) {
-        ljgap_verr_add(e, "/psd/P_err", "has %zu entries but P has %zu: give one error per P", ne,
-                       nP);
-        return;
-    }
-    if (!(s->P_err = malloc(ne * sizeof *s->P_err))) {
-        e->oom = 1;
-        return;
-    }
-    cJSON_ArrayForEach(it, pe)
-    {
-        snprintf(ptr, sizeof ptr, "/psd/P_err/%zu", i);
-        s->P_err[i] = NAN;
-        if (num(e, it, ptr, &s->P_err[i]) && !(s->P_err[i] >= 0))
-            ljgap_verr_add(e, ptr, "must be at least 0 (a standard error; got %g)", s->P_err[i]);
-        else if (mat)
-            s->P_err[i] = ljgap_units_P_to_dimless(mat, s->P_err[i]);
-        i++;
-    }
-}
-
-static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
-                        ljgap_psd_spec *s)
-{
-    const cJSON *k, *P, *tail;
-    size_t nk = 0, nP = 0;
-    char ptr[PTR_LEN];
-    only_fields(e, psd, "/psd", table_fields, NULL);
-    k = required(e, psd, "/psd", "k", "increasing wavenumbers");
-    P = required(e, psd, "/psd", "P", "the PSD at each k");
-    if (k) nk = array_of(e, k, "/psd/k", 2, PSD_TABLE_MAX, "table wavenumbers");
-    if (P) nP = array_of(e, P, "/psd/P", 2, PSD_TABLE_MAX, "table PSD values");
-    if (nk > 1 && nP > 0 && nP != nk)
-        ljgap_verr_add(e, "/psd/P", "has %zu entries but k has %zu: give one P per k", nP, nk);
-    if (nk > 1 && nP == nk) {
-        s->k = table_column(e, k, "/psd/k", nk);
-        s->P = table_column(e, P, "/psd/P", nk);
-        s->n = nk;
-        for (size_t i = 0; mat && s->k && s->P && i < nk; i++) {
-            s->k[i] = ljgap_units_k_to_dimless(mat, s->k[i]);
-            s->P[i] = ljgap_units_P_to_dimless(mat, s->P[i]);
-        }
-        for (size_t i = 1; s->k && i < nk; i++) {
-            snprintf(ptr, sizeof ptr, "/psd/k/%zu", i);
-            if (isfinite(s->k[i]) && isfinite(s->k[i - 1]) && !(s->k[i] > s->k[i - 1]))
-                ljgap_verr_add(e, ptr,
-                               "k must be strictly increasing: k[%zu] = %g follows "
-                               "k[%zu] = %g",
-                               i, s->k[i], i - 1, s->k[i - 1]);
-        }
-        if (s->k && isfinite(s->k[0]) && !(s->k[0] > ljgap_k0()))
-            ljgap_verr_add(e, "/psd/k/0",
-                           "the table starts at k = %g, at or below k0 = %.5f: "
-                           "%s",
-                           s->k[0], ljgap_k0(), k0_why());
-    }
-    parse_table_errors(e, psd, mat, nP, s);
-    tail = member(psd, "tail");
-    if (tail && !cJSON_IsObject(tail)) {
-        ljgap_verr_add(e, "/psd/tail", "must be an object {\"exponent\": q}");
-    } else if (tail) {
-        const cJSON *q;
-        only_fields(e, tail, "/psd/tail", tail_fields, NULL);
-        q = required(e, tail, "/psd/tail", "exponent", "P ∝ k^q beyond the last point");
-        s->has_tail = 1;
-        if (q && num(e, q, "/psd/tail/exponent", &s->tail_q) && !(s->tail_q < -2))
-            ljgap_verr_add(e, "/psd/tail/exponent",
-                           "q = %g must be below -2, or the tail "
-                           "carries infinite variance",
-                           s->tail_q);
-        if ((q = member(tail, "exponent_err")) &&
-            num(e, q, "/psd/tail/exponent_err", &s->tail_q_err) && !(s->tail_q_err >= 0)) {
-            ljgap_verr_add(e, "/psd/tail/exponent_err",
-                           "must be at least 0 (the exponent's standard error; got %g)",
-                           s->tail_q_err);
-            s->tail_q_err = 0;
-        }
-    }
-}
-
-static void parse_psd(ljgap_verr *e, const cJSON *root, const ljgap_material *mat,
-                      ljgap_psd_spec *s)
-{
-    static const char *const kinds[] = {"power", "table", NULL};
-    const cJSON *psd = required(e, root, "", "psd", "the surface's power spectral density");
-    const cJSON *kind;
-    if (!psd) return;
-    if (!cJSON_IsObject(psd)) {
-        ljgap_verr_add(e, "/psd", "must be an object {\"kind\": \"power\" | \"table\", ...}");
-        return;
-    }
-    kind = required(e, psd, "/psd", "kind", "\"power\" or \"table\"");
-    if (!kind) return;
-    switch (pick(e, kind, "/psd/kind", kinds, "kind", "\"power\" or \"table\"")) {
-    case 0:
-        s->kind = LJGAP_PSD_POWER;
-        parse_power(e, psd, mat, s);
-        break;
-    case 1:
-        s->kind = LJGAP_PSD_TABLE;
-        parse_table(e, psd, mat, s);
-        break;
-    }
-}
-
 /* A Poisson ratio in (-1, 0.5] at obj[name] (pointer /material/name). */
 static int poisson(ljgap_verr *e, const cJSON *obj, const char *name, double *nu)
 {
@@ -690,7 +474,7 @@ static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *l
             ljgap_warn(&rq->warn, "samples is used by method \"montecarlo\" only and was "
                                   "ignored");
     }
-    if ((it = member(root, "seed")) && num_int(e, it, "/seed", 0, SEED_MAX, &x)) {
+    if ((it = member(root, "seed")) && num_int(e, it, "/seed", 0, LJGAP_SEED_MAX, &x)) {
         rq->opts.seed = (unsigned long)x;
         if (rq->opts.method != LJGAP_METHOD_MC)
             ljgap_warn(&rq->warn, "seed is used by method \"montecarlo\" only and was ignored");
@@ -830,142 +614,6 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
     }
 }
 
-/* The band [k1, k2] of a parsed psd into k (NAN where unknown, k2 INFINITY for a power law
- * without one or a table with a tail). */
-static void sim_band(const ljgap_psd_spec *s, double k[2])
-{
-    k[0] = k[1] = NAN;
-    if (s->kind == LJGAP_PSD_POWER) {
-        k[0] = s->k1;
-        k[1] = s->k2;
-    } else if (s->kind == LJGAP_PSD_TABLE && s->k && s->n > 1) {
-        k[0] = s->k[0];
-        k[1] = s->has_tail ? INFINITY : s->k[s->n - 1];
-    }
-    if (!isfinite(k[0])) k[0] = NAN;
-}
-
-/* The hybrid's k_split: k1 <= k_split <= LJGAP_K_MAX and above k0 (its band's law is the
- * theory's). Returns the top wavenumber the grid must carry, *name its name: k_split when it is
- * below k2, else k2, which must then be finite (the plain model), NAN when unknown. */
-static double sim_top(ljgap_verr *e, const cJSON *root, const ljgap_psd_spec *s, const double k[2],
-                      ljgap_sim_opts *o, const char **name)
-{
-    const cJSON *it = member(root, "k_split");
-    double x;
-    int bad = e->n;
-    *name = "k2";
-    if (it && num_pos(e, it, "/k_split", &x)) {
-        if (!isnan(k[0]) && !(x >= k[0]))
-            ljgap_verr_add(e, "/k_split",
-                           "k_split = %g is below k1 = %g: the grid carries [k1, k_split] "
-                           "(k_split = k1 is the theory alone)",
-                           x, k[0]);
-        else if (!(x > ljgap_k0()))
-            ljgap_verr_add(e, "/k_split",
-                           "k_split = %g is at or below k0 = %.5f: the fine band's law (the "
-                           "theory) needs k_split > k0 (19)",
-                           x, ljgap_k0());
-        else if (in_core_range(e, "/k_split", "k_split", x, 0, LJGAP_K_MAX))
-            o->k_split = x;
-    }
-    if (it && e->n > bad) return NAN; /* a bad k_split: the grid is checked once it is fixed */
-    if (o->k_split > 0 && !(o->k_split >= k[1])) {
-        *name = "k_split";
-        return o->k_split;
-    }
-    if (s->kind == LJGAP_PSD_POWER && isinf(k[1]))
-        ljgap_verr_add(e, "/psd/k2",
-                       "the numerical model needs a band-limited PSD: give a finite k2 (the grid "
-                       "carries wavenumbers up to πn/L), or k_split for the hybrid");
-    else if (s->kind == LJGAP_PSD_TABLE && s->has_tail)
-        ljgap_verr_add(e, "/psd/tail",
-                       "the numerical model needs a band-limited PSD: drop the tail (the table "
-                       "then ends at its last k), or give k_split for the hybrid");
-    return isfinite(k[1]) ? k[1] : NAN;
-}
-
-/* The grid of a simulation: n even in [8, LJGAP_SIM_N_MAX], L in [2π/k1, 1e4·2π/k1] (0: 2π/k1),
- * and the Nyquist wavenumber πn/L at or above top (k2, or k_split for the hybrid: the rules of
- * ljgap_sim_run; a grid that misses it is reported at /n with the n that would do, or at
- * /psd/k2 or /k_split when none would). */
-static void parse_sim_grid(ljgap_verr *e, const cJSON *root, double k1, double top,
-                           const char *name, ljgap_sim_opts *o)
-{
-    const cJSON *it;
-    double x, Lmin = 2 * M_PI / k1, L;
-    int ok = 1;
-    if ((it = member(root, "n"))) {
-        if (!num_int(e, it, "/n", 8, LJGAP_SIM_N_MAX, &x)) {
-            ok = 0;
-        } else if (fmod(x, 2) != 0) {
-            ljgap_verr_add(e, "/n", "n = %g must be even (the grid is n × n for the FFT)", x);
-            ok = 0;
-        } else {
-            o->n = (int)x;
-        }
-    }
-    if ((it = member(root, "L"))) {
-        if (!num_pos(e, it, "/L", &o->L)) {
-            ok = 0;
-        } else if (!isnan(Lmin) && !(o->L >= Lmin * (1 - 1e-12) && o->L <= 1e4 * Lmin)) {
-            ljgap_verr_add(e, "/L",
-                           "L = %g is outside [2π/k1, 1e4·2π/k1] = [%.6g, %.6g]: the square "
-                           "must carry the band's longest wave",
-                           o->L, Lmin, 1e4 * Lmin);
-            ok = 0;
-        }
-    }
-    if (!ok || isnan(Lmin) || isnan(top)) return;
-    L = o->L > 0 ? o->L : Lmin;
-    if (top > M_PI * o->n / L * (1 + 1e-12)) {
-        double need = ceil(top * L / M_PI);
-        need += fmod(need, 2);
-        if (need <= LJGAP_SIM_N_MAX)
-            ljgap_verr_add(e, "/n",
-                           "the grid does not resolve %s = %g: its highest wavenumber is "
-                           "πn/L = %g (n = %d, L = %g); n >= %.0f would do",
-                           name, top, M_PI * o->n / L, o->n, L, need);
-        else
-            ljgap_verr_add(e, strcmp(name, "k2") ? "/k_split" : "/psd/k2",
-                           "no grid resolves %s = %g with L = %g: that needs n >= %.0f, over "
-                           "the cap %d; lower %s or take a smaller L",
-                           name, top, L, need, LJGAP_SIM_N_MAX, name);
-    }
-}
-
-/* A simulation (ljgap_sim.h): k_split (the hybrid), grid, realizations, seed, tol and the mean
- * gaps, which are a list or a range as for traction, at most LJGAP_SIM_GAPS_MAX of them. */
-static void parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
-                             ljgap_request *rq)
-{
-    ljgap_sim_opts *o = &rq->sim;
-    ljgap_limits gaps = *lim;
-    const cJSON *it;
-    double x, k[2];
-    const char *top_name;
-    ljgap_sim_opts_default(o);
-    sim_band(&rq->psd, k);
-    double top = sim_top(e, root, &rq->psd, k, o, &top_name);
-    parse_sim_grid(e, root, k[0], top, top_name, o);
-    if ((it = member(root, "realizations")) &&
-        num_int(e, it, "/realizations", 1, LJGAP_SIM_REALIZATIONS_MAX, &x))
-        o->realizations = (int)x;
-    if ((it = member(root, "seed")) && num_int(e, it, "/seed", 0, SEED_MAX, &x))
-        o->seed = (unsigned long)x;
-    if ((it = member(root, "tol")) && num(e, it, "/tol", &x)) {
-        if (x >= 1e-14 && x <= 1e-2)
-            o->tol = x;
-        else
-            ljgap_verr_add(e, "/tol",
-                           "tol = %g is outside [1e-14, 1e-2] (the rms residual of the force "
-                           "balance relative to σ0)",
-                           x);
-    }
-    if (gaps.max_points > LJGAP_SIM_GAPS_MAX) gaps.max_points = LJGAP_SIM_GAPS_MAX;
-    parse_traction(e, root, &gaps, rq);
-}
-
 int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq, ljgap_verr *e)
 {
@@ -986,8 +634,8 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     if (ep == LJGAP_EP_SIMULATION) {
         rq->method = "numerical";
         only_fields(e, root, "", sim_fields, NULL);
-        parse_psd(e, root, NULL, &rq->psd);
-        parse_simulation(e, root, lim, rq);
+        ljgap_request_parse_psd_spec(e, root, NULL, &rq->psd);
+        ljgap_request_parse_simulation(e, root, lim, rq);
         return e->n;
     }
     if (ep == LJGAP_EP_PSD) {
@@ -1006,7 +654,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     /* an SI psd cannot be checked without a valid material: its problems come first */
     if (si == 0 || (si == 1 && rq->has_material)) {
         rq->si_psd = si;
-        parse_psd(e, root, si ? &rq->mat : NULL, &rq->psd);
+        ljgap_request_parse_psd_spec(e, root, si ? &rq->mat : NULL, &rq->psd);
     }
     switch (ep) {
     case LJGAP_EP_ADHESION:
@@ -1129,4 +777,36 @@ int ljgap_v_pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *co
 void ljgap_v_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq)
 {
     parse_material(e, root, need, rq);
+}
+
+size_t ljgap_v_array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+                        const char *what)
+{
+    return array_of(e, it, ptr, min, max, what);
+}
+
+int ljgap_v_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
+{
+    return check_k1(e, it, ptr, chi, k1);
+}
+
+const char *ljgap_v_k0_why(void)
+{
+    return k0_why();
+}
+
+int ljgap_v_D(ljgap_verr *e, const char *ptr, double D, const double *h)
+{
+    return check_D(e, ptr, D, h);
+}
+
+int ljgap_v_num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi,
+                    double *x)
+{
+    return num_int(e, it, ptr, lo, hi, x);
+}
+
+void ljgap_v_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq)
+{
+    parse_traction(e, root, lim, rq);
 }

@@ -18,6 +18,8 @@
 
 #include <cjson/cJSON.h>
 
+#define LJGAP_SEED_MAX 9007199254740991.0 /* 2^53 - 1: the largest integer a JSON number keeps */
+
 /* The endpoints the handler computes. */
 typedef enum {
     LJGAP_EP_ADHESION,
@@ -167,6 +169,26 @@ int ljgap_v_pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *co
                  const char *field, const char *what);
 /* The request's material block into rq (need: it must be there). */
 void ljgap_v_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq);
+/* A JSON array of min..max entries at it (what it should hold); its size, or 0. */
+size_t ljgap_v_array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+                        const char *what);
+/* k1 at it, k0 < chi k1 checked (chi 1: dimensionless); 0 after recording why not. */
+int ljgap_v_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1);
+/* 2 < D < 3 (h: the Hurst exponent it came from, or NULL); 0 after recording why not. */
+int ljgap_v_D(ljgap_verr *e, const char *ptr, double D, const double *h);
+/* Why k1 must be above k0, for the details. */
+const char *ljgap_v_k0_why(void);
+/* An integer JSON number in [lo, hi] at it into *x; 0 after recording why not. */
+int ljgap_v_num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi,
+                    double *x);
+/* traction's g_ave (a list or a range) into rq. */
+void ljgap_v_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq);
+/* request_sim.c: a simulation request's own fields into rq (its psd already read). */
+void ljgap_request_parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
+                                    ljgap_request *rq);
+/* request_psd.c: root's psd object into s (SI with mat, else dimensionless). */
+void ljgap_request_parse_psd_spec(ljgap_verr *e, const cJSON *root, const ljgap_material *mat,
+                                  ljgap_psd_spec *s);
 /* request_topo.c: a psd request (text: the matrix came as text, already in rq->topo). */
 void ljgap_request_parse_psd(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
                              ljgap_request *rq);
