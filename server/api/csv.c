@@ -8,6 +8,7 @@
  * read from the answer.
  */
 #include "csv.h"
+#include "problems.h" /* ljgap_reply_problem */
 
 #include <math.h>
 #include <stdio.h>

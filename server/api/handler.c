@@ -269,7 +269,7 @@ void ljgap_ans_meta(job *j, double t0)
     w = put(j, meta, "warnings", cJSON_CreateArray());
     for (int i = 0; w && i < j->rq.warn.n; i++)
         put(j, w, NULL, cJSON_CreateString(j->rq.warn.msg[i]));
-    put(j, meta, "cached", cJSON_CreateFalse());
+    put(j, meta, "cached", cJSON_CreateFalse()); /* last: LJGAP_REPLY_UNCACHED_TAIL (reply.h) */
 }
 
 /* Core options for one call: the request's, capped by what is left of the time budget. */
@@ -574,15 +574,16 @@ void ljgap_ans_si(job *j)
     put_si(j, j->ans, NULL);
 }
 
-/* ---- routing ---- */
+/* ---- the endpoints: a name to its runner (the URL routes are the daemon's, ljgapd/routes.c,
+ * whose POST /v1/NAME rows hand NAME here) ---- */
 
 typedef struct {
-    const char *name;
-    ljgap_endpoint ep;
-    int (*run)(job *j);
-} route;
+    const char *name;   /* the endpoint's name, POST /v1/NAME */
+    ljgap_endpoint ep;  /* what request.c validates it as */
+    int (*run)(job *j); /* builds the answer in j->ans */
+} endpoint_row;
 
-static const route routes[] = {
+static const endpoint_row endpoints[] = {
     {"adhesion", LJGAP_EP_ADHESION, run_adhesion},
     {"traction", LJGAP_EP_TRACTION, run_traction},
     {"pdf", LJGAP_EP_PDF, run_pdf},
@@ -592,16 +593,16 @@ static const route routes[] = {
     {"psd/combine", LJGAP_EP_COMBINE, ljgap_run_combine},
 };
 
-static const route *route_find(const char *name)
+static const endpoint_row *endpoint_find(const char *name)
 {
-    for (size_t i = 0; name && i < sizeof routes / sizeof routes[0]; i++)
-        if (strcmp(name, routes[i].name) == 0) return &routes[i];
+    for (size_t i = 0; name && i < sizeof endpoints / sizeof endpoints[0]; i++)
+        if (strcmp(name, endpoints[i].name) == 0) return &endpoints[i];
     return NULL;
 }
 
 int ljgap_handler_has(const char *endpoint)
 {
-    return route_find(endpoint) != NULL;
+    return endpoint_find(endpoint) != NULL;
 }
 
 /* "; "-joined warnings after prefix into buf. */
@@ -776,9 +777,11 @@ static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
     if (!st && j->oom) st = LJGAP_ENOMEM;
     if (st)
         ljgap_ans_status(out, st, j);
-    else if (form == 0)
+    else if (form == 0) {
+        /* meta is the answer's last member and cached its own last one (ljgap_ans_meta) */
         ljgap_ans_reply_json(out, 200, CT_JSON, j->ans);
-    else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
+        out->cacheable = out->status == 200;
+    } else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
         ljgap_ans_oom(out);
     cJSON_Delete(j->ans);
     j->ans = NULL;
@@ -793,9 +796,10 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
                        ljgap_reply *out)
 {
     double t0 = ljgap_now();
-    const route *r = route_find(endpoint);
+    const endpoint_row *r = endpoint_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
+    out->cacheable = 0;
     int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
@@ -828,6 +832,7 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
     ljgap_topo_spec heights = {0};
     ljgap_verr ve = {0};
     cJSON *query = NULL;
+    out->cacheable = 0;
     char detail[DETAIL_LEN];
     job j;
     int form;

@@ -8,7 +8,7 @@
 #ifndef LJGAP_HANDLER_H
 #define LJGAP_HANDLER_H
 
-#include "limits.h" /* ljgap_limits, ljgap_call, ljgap_param */
+#include "settings.h" /* ljgap_limits, ljgap_call, ljgap_param */
 #include "reply.h"  /* ljgap_reply, ljgap_reply_free */
 
 #include <stddef.h>

@@ -16,7 +16,16 @@ typedef struct {
     size_t len;               /* strlen(body) */
     const char *content_type; /* "application/json", "application/problem+json", text/csv
                                * (csv.h) or text/html (problems.h) */
+    int cacheable;            /* set by the handler (ljgap_handle_call) on a 200 JSON answer
+                               * whose body ends with LJGAP_REPLY_UNCACHED_TAIL: a cache may
+                               * keep it with that tail replaced by LJGAP_REPLY_CACHED_TAIL.
+                               * 0 for everything else (CSV, problems, pages). */
 } ljgap_reply;
+
+/* The last bytes of a cacheable answer (meta.cached, meta's last member, meta the answer's last)
+ * and what a cache answers instead. */
+#define LJGAP_REPLY_UNCACHED_TAIL "\"cached\":false}}"
+#define LJGAP_REPLY_CACHED_TAIL "\"cached\":true}}"
 
 /* Frees r->body and empties *r (NULL is fine). */
 void ljgap_reply_free(ljgap_reply *r);

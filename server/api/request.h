@@ -10,7 +10,7 @@
 #ifndef LJGAP_REQUEST_H
 #define LJGAP_REQUEST_H
 
-#include "limits.h"
+#include "settings.h"
 #include "ljgap.h"
 #include "ljgap_sim.h"
 #include "ljgap_topo.h"

@@ -197,21 +197,16 @@ static int over_budget(struct MHD_Connection *c, request *r, size_t est, enum MH
 
 /* ---- POST /v1/NAME: the cache, then a compute slot ---- */
 
-/* Stores a 2xx JSON answer under key with meta.cached set to true, so hits can be sent as
- * stored. The handler writes "cached":false as the last member of meta, and meta as the
- * answer's last member, so the answer ends with CACHED_TAIL; a JSON string cannot hold that
- * text unescaped, so the match is that member. The cache stores the answer up to that member
- * and the new tail, where parsing and printing the answer again cost about 2 % of a whole
- * adhesion request. */
-#define CACHED_TAIL "\"cached\":false}}"
+/* Stores an answer the handler marked cacheable (reply.h) under key, with meta.cached true, so
+ * that hits can be sent as stored: the answer up to its LJGAP_REPLY_UNCACHED_TAIL, then
+ * LJGAP_REPLY_CACHED_TAIL (parsing and printing the answer again would cost about 2 % of a whole
+ * adhesion request). */
 static void cache_store(const char *key, size_t klen, const ljgap_reply *rep)
 {
-    static const char tail[] = CACHED_TAIL, yes[] = "\"cached\":true}}";
-    const size_t n = sizeof tail - 1;
+    static const char yes[] = LJGAP_REPLY_CACHED_TAIL;
+    const size_t n = sizeof LJGAP_REPLY_UNCACHED_TAIL - 1;
 
-    if (strcmp(rep->content_type, "application/json") != 0 || rep->len < n ||
-        memcmp(rep->body + rep->len - n, tail, n) != 0)
-        return; /* CSV, or not an answer of the handler's shape: not cached */
+    if (!rep->cacheable || rep->len < n) return; /* CSV, a problem: not cached */
     http_cache_put2(ljgapd_srv.cache, key, klen, rep->status, rep->body, rep->len - n, yes,
                     sizeof yes - 1);
 }

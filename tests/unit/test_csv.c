@@ -207,7 +207,7 @@ static void check_comments(const csv_doc *d, const cJSON *ans)
 /* The CSV form of ans (a 200 answer of endpoint, given as JSON text). */
 static char *to_csv(const char *endpoint, const char *json)
 {
-    ljgap_reply r = {200, strdup(json), strlen(json), "application/json"};
+    ljgap_reply r = {200, strdup(json), strlen(json), "application/json", 0};
     char *s;
     assert_int_equal(ljgap_csv_reply(endpoint, &r), 0);
     assert_int_equal(r.status, 200);

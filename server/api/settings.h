@@ -1,10 +1,10 @@
-/* limits.h -- what one call of the request handler is given besides its body: the server-wide
+/* settings.h -- what one call of the request handler is given besides its body: the server-wide
  * limits (set once at start-up), the per-call settings (cancel flag, Accept header) and a text
  * upload's query parameters. Its own header so that validation (request.h) and the handler
  * (handler.h) both include it downward.
  */
-#ifndef LJGAP_LIMITS_H
-#define LJGAP_LIMITS_H
+#ifndef LJGAP_SETTINGS_H
+#define LJGAP_SETTINGS_H
 
 #include <stddef.h>
 

@@ -1,5 +1,5 @@
-/* limits.c -- the request handler's limits (limits.h): defaults and the psd map's cap. */
-#include "limits.h"
+/* settings.c -- the request handler's limits (settings.h): defaults and the psd map's cap. */
+#include "settings.h"
 
 #include <unistd.h>
 
