@@ -4,8 +4,8 @@
 #   make run        install what building and serving need, build, serve on $(PORT) with the
 #                   jobs kept in $(BUILD)/state
 #   make check      the quick loop after an edit (under 2 minutes on 2 cores): build, then the
-#                   unit tests but the three long numerical ones, the HTTP, contract, CSV and
-#                   CLI suites (last line: tests: N passed, N failed)
+#                   unit tests but the three long numerical ones, the HTTP, contract, CSV, CLI
+#                   and layout suites (last line: tests: N passed, N failed)
 #   make test       install that and the test tools, build, run every test but the memcheck
 #                   suite, JOBS (default: the cores) at a time (last line as above);
 #                   MEMCHECK=1 adds it (.ci/run does, in the plain build)
@@ -238,7 +238,7 @@ test: check-deps-test
 
 # What an edit usually breaks, quickly: test_mc, test_cross and test_paper (the Monte Carlo and
 # the paper's figures, minutes between them) wait for make test.
-CHECK_SUITES := unit -test_mc -test_cross -test_paper http contract csv cli
+CHECK_SUITES := unit -test_mc -test_cross -test_paper http contract csv cli layout
 check: check-deps-test
 	@$(MAKE) --no-print-directory $(CONTRACT_NPM_STAMP)
 	@$(MAKE) --no-print-directory $(PROGS) $(UNIT_BIN)

@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""check.py -- the source layout holds (issue 27). Standard library only.
+
+  check.py cycles    the include graph of core/, include/ and server/ between modules (a module:
+                     NAME.c with NAME.h in one folder; an #include "x.h" is resolved as the
+                     compiler does, the including file's folder first, then the Makefile's -I
+                     folders) has no cycle; core/ and include/ include nothing from server/;
+                     server/api/ includes nothing from jobs/, ljgapd/ or cli/, and server/jobs/
+                     nothing from ljgapd/ or cli/ (the daemon and the CLI sit on top)
+  check.py sizes     no .c or .h file of core/, include/, server/ or tools/ is over 900 lines
+                     (but those in PENDING, which may not grow) and no folder holds more than
+                     16 .c files
+Prints one "ok - ..." or "not ok - ..." line per check (TAP style).
+"""
+import os
+import re
+import sys
+
+ROOTS = ["core", "include", "server", "tools"]
+# the Makefile's -I folders, in its order
+INCLUDE_DIRS = ["include", "core", "core/sim", "server/api", "server/jobs", "server/ljgapd"]
+MAX_LINES = 900
+MAX_C_FILES = 16
+# Over MAX_LINES still, each to be split along its seams (issue 27): they may not grow meanwhile.
+PENDING = {"core/topo.c": 1480, "server/jobs/jobstore_pg.c": 1031}
+
+
+def report(ok, what, detail=""):
+    print(("ok - " if ok else "not ok - ") + what + (f" ({detail})" if detail and not ok else ""))
+
+
+def sources():
+    out = []
+    for root in ROOTS:
+        for d, _, files in os.walk(root):
+            out += [os.path.join(d, f) for f in sorted(files) if f.endswith((".c", ".h"))]
+    return sorted(out)
+
+
+def module(path):
+    return os.path.splitext(path)[0]
+
+
+def resolve(src, name):
+    for d in [os.path.dirname(src)] + INCLUDE_DIRS:
+        p = os.path.normpath(os.path.join(d, name))
+        if os.path.exists(p):
+            return p
+    return None
+
+
+def check_cycles():
+    files = [f for f in sources() if not f.startswith("tools/")]
+    edges = {}
+    upward = []
+    for f in files:
+        m = module(f)
+        for name in re.findall(r'^\s*#\s*include\s+"([^"]+)"', open(f, encoding="utf-8").read(), re.M):
+            h = resolve(f, name)
+            if h is None:
+                continue
+            if module(h) != m:
+                edges.setdefault(m, set()).add(module(h))
+            top = lambda p: p.split("/")[0] if not p.startswith("server/") else "/".join(p.split("/")[:2])
+            a, b = top(f), top(h)
+            bad = (a in ("core", "include") and b.startswith("server")) or \
+                  (a == "server/api" and b in ("server/jobs", "server/ljgapd", "server/cli")) or \
+                  (a == "server/jobs" and b in ("server/ljgapd", "server/cli"))
+            if bad:
+                upward.append(f"{f} includes {h}")
+    # cycles: depth-first search, reporting each cycle found once
+    cycles, state, stack = [], {}, []
+
+    def visit(m):
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(edges.get(m, ())):
+            if state.get(n) == 1:
+                cycles.append(" -> ".join(stack[stack.index(n):] + [n]))
+            elif n not in state:
+                visit(n)
+        stack.pop()
+        state[m] = 2
+
+    for m in sorted({module(f) for f in files}):
+        if m not in state:
+            visit(m)
+    report(not cycles, f"no include cycle between the {len({module(f) for f in files})} modules "
+           "of core/, include/ and server/", "; ".join(cycles))
+    report(not upward, "no upward include (core/ of server/, api/ of jobs/ or the daemon, jobs/ "
+           "of the daemon)", "; ".join(upward))
+
+
+def check_sizes():
+    big = []
+    per_dir = {}
+    for f in sources():
+        n = sum(1 for _ in open(f, encoding="utf-8"))
+        if n > MAX_LINES and n > PENDING.get(f, 0):
+            big.append(f"{f} {n}" + (f" (pending split, was {PENDING[f]})" if f in PENDING else ""))
+        elif n > MAX_LINES:
+            print(f"# {f}: {n} lines, a split still pending")
+        if f.endswith(".c"):
+            per_dir[os.path.dirname(f)] = per_dir.get(os.path.dirname(f), 0) + 1
+    report(not big, f"no source file over {MAX_LINES} lines (but {len(PENDING)} pending splits, "
+           "which may not grow)", ", ".join(big))
+    full = [f"{d} {n}" for d, n in sorted(per_dir.items()) if n > MAX_C_FILES]
+    report(not full, f"no folder over {MAX_C_FILES} .c files", ", ".join(full))
+
+
+if __name__ == "__main__":
+    os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+    {"cycles": check_cycles, "sizes": check_sizes}[sys.argv[1]]()
