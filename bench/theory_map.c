@@ -9,11 +9,12 @@
  * One CSV row per model: the theory, the discrete model at n, L (R realizations) unless
  * --no-full, and the hybrid at each k_split (on hyb-n points, the same L). The discrete
  * summaries come from the mean curve over a sweep of mean gaps (dense near contact, out to
- * where the analytic tail of ljgap_curve_summary holds), and their errors are the jackknife
+ * where the analytic tail of ljgap__curve_summary holds), and their errors are the jackknife
  * over realizations (the summary of each leave-one-out mean) plus the sweep's sampling error
  * (|summary(all gaps) - summary(every other gap)| / 15: the spline is fourth order) plus, for
  * the hybrid, the law's own error (in error.sigma). Timings are wall seconds of the run.
  */
+#include "core.h" /* ljgap__curve_summary */
 #include "ljgap_sim.h"
 
 #include <gsl/gsl_errno.h>
@@ -47,7 +48,7 @@ static int curve_sum(const double *g, const double *u, size_t n, int stride, dou
         gg[m] = g[i], uu[m++] = u[i];
     if (gg[m - 1] != g[n - 1]) gg[m] = g[n - 1], uu[m++] = u[n - 1];
     ljgap_warnings w = {0};
-    return ljgap_curve_summary(gg, uu, m, m0, s, &w);
+    return ljgap__curve_summary(gg, uu, m, m0, s, &w);
 }
 
 /* The discrete (or hybrid) model's summary with errors; *secs its run time. */

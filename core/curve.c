@@ -12,6 +12,7 @@
  * transfer is f ≈ 1 and the mean traction is the blurred L-J law.
  */
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_roots.h>
@@ -94,7 +95,7 @@ static double brent_root(gsl_function F, double a, double b)
     return x;
 }
 
-int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_tail,
+int ljgap__curve_summary(const double *g, const double *u, size_t n, double m0_tail,
                         ljgap_summary *out, ljgap_warnings *w)
 {
     out->m0 = m0_tail;

@@ -21,13 +21,14 @@
  * whatever the number of steps the path takes; gsl_ran_gaussian_ziggurat draws.
  *
  * Errors: sigma_bar at given g_ave, the standard error over paths; the summary (curve of 48
- * g_ave on [0.8, max(8, 12√m0 + 1)], denser at the low end, through ljgap_curve_summary)
- * by 16 batch means; both plus the step bias measured by a run at 2c (ljgap_traction_mc),
- * and so are the PDFs' sigma and L1 error (ljgap_pdf_mc). Work (path steps summed over points) is
+ * g_ave on [0.8, max(8, 12√m0 + 1)], denser at the low end, through ljgap__curve_summary)
+ * by 16 batch means; both plus the step bias measured by a run at 2c (ljgap__traction_mc),
+ * and so are the PDFs' sigma and L1 error (ljgap__pdf_mc). Work (path steps summed over points) is
  * capped by o->max_work and time by o->max_seconds: a pilot batch measures the cost and the number
  * of paths is reduced with a warning when needed.
  */
 #include "mc.h"
+#include "core.h" /* the core's internals */
 
 #include <gsl/gsl_randist.h>
 #include <gsl/gsl_rng.h>
@@ -153,7 +154,7 @@ static void mc_report(const mc_state *m, ljgap_warnings *w)
 
 static int stop_status(const ljgap_opts *o, double deadline)
 {
-    if (!ljgap_should_stop(o, deadline)) return LJGAP_OK;
+    if (!ljgap__should_stop(o, deadline)) return LJGAP_OK;
     return (o->cancel && *o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
 }
 
@@ -284,7 +285,7 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
             ljgap_summary sb;
             for (size_t i = 0; i < nc; i++)
                 u[i] = bm[b * np + n + i];
-            if (ljgap_curve_summary(g + n, u, nc, psd->m0, &sb, NULL)) continue;
+            if (ljgap__curve_summary(g + n, u, nc, psd->m0, &sb, NULL)) continue;
             double v[4] = {sb.g_eq.value, sb.sigma_max.value, sb.g_at_max.value,
                            sb.dgamma_eff.value};
             for (int q = 0; q < 4; q++)
@@ -293,7 +294,7 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
         }
         for (size_t i = 0; i < nc; i++)
             u[i] = s1[n + i] / (double)(nb * B);
-        st = ljgap_curve_summary(g + n, u, nc, psd->m0, sum, w);
+        st = ljgap__curve_summary(g + n, u, nc, psd->m0, sum, w);
         free(u);
         if (st) goto end;
         if (nok < 2) {
@@ -326,7 +327,7 @@ end:
  * variance). A second run at 2c, a quarter of the cost, measures it: b = (r(2c) - r(c))/3.
  * The answer is r(c) - b, and |b| is added to the standard error, so the estimate covers
  * the discretisation as well as the sampling. The two runs share their path seeds. */
-int ljgap_traction_mc(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+int ljgap__traction_mc(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     ljgap_opts o1 = *o, o2 = *o;
@@ -478,7 +479,7 @@ static double hist_at(const ljgap_pdf *b, double g)
  * histogram is left as sampled (a corrected one could go negative) and its L1 estimate gains
  * the L1 distance of the two histograms / 3 (on the same grid when one is asked for; without
  * one the two runs bin on slightly different ranges, which only adds to the estimate). */
-int ljgap_pdf_mc(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
+int ljgap__pdf_mc(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                  size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
     ljgap_opts o1 = *o, o2 = *o;

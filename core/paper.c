@@ -30,7 +30,7 @@
  * tol/10 the lower end is moved down (theory.md §3: for D near 3 the finest waves carry
  * paths close to the wall). g_hi = max(8, g_end + 10√m0), g_end being the largest gap whose
  * sigma_bar is needed (for the summary max(8, 12√m0 + 1), beyond which the analytic tail of
- * ljgap_curve_summary takes over).
+ * ljgap__curve_summary takes over).
  *
  * Error: the iteration is first order in Vmax, so each level is compared with one at Vmax/2
  * (h follows the rule); err = |r(V) - r(V/2)|, or the larger of the last two such differences
@@ -43,6 +43,7 @@
  * with 3 |r(V) - r(V/2)| as its error and a warning if that misses tol.
  */
 #include "paper.h"
+#include "core.h" /* the core's internals */
 
 #include <math.h>
 #include <stdlib.h>
@@ -260,7 +261,7 @@ static void band_apply(ljgap__paper_ws *ws, const ljgap_psd *psd, size_t b, cons
 
 static int stop_status(const ljgap_opts *o, double deadline)
 {
-    if (!o || !ljgap_should_stop(o, deadline)) return LJGAP_OK;
+    if (!o || !ljgap__should_stop(o, deadline)) return LJGAP_OK;
     return (o->cancel && *o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
 }
 
@@ -354,7 +355,7 @@ static int trac_level(const ljgap_psd *psd, const ljgap_opts *o, double deadline
         if (i1 >= ws->n) i1 = ws->n - 1;
         ljgap_summary s;
         memset(&s, 0, sizeof s);
-        st = ljgap_curve_summary(g + i0, u + i0, i1 - i0 + 1, psd->m0, &s, w);
+        st = ljgap__curve_summary(g + i0, u + i0, i1 - i0 + 1, psd->m0, &s, w);
         if (st) goto end;
         val[n + 0] = s.g_eq.value;
         val[n + 1] = s.sigma_max.value;
@@ -489,7 +490,7 @@ static void fixed_warn(const ljgap_opts *o, ljgap_warnings *w)
                o->vmax);
 }
 
-int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+int ljgap__traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                          ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     if (!(o->vmax > 0) || !isfinite(o->vmax) || (n && !sigma)) return LJGAP_EINVAL;
@@ -714,7 +715,7 @@ int ljgap__paper_pdf_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax, 
     return st;
 }
 
-int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
+int ljgap__pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                     size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
     if (!(o->vmax > 0) || !isfinite(o->vmax)) return LJGAP_EINVAL;

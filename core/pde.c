@@ -37,6 +37,7 @@
  *    change is added to the error estimate.
  */
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 #include "fold.h"
 #include "march.h"
 #include "pde.h"
@@ -276,7 +277,7 @@ static int solve_curve(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, 
     for (size_t j = M.m; j-- > 0;) {
         const pde_step *s = &M.s[j];
         ljgap__fold_back(&F, s->ka, s->kb, s->theta * s->sa, (1.0 - s->theta) * s->sb);
-        if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
+        if ((j & 31) == 0 && ljgap__should_stop(C->o, C->deadline)) {
             st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
             goto fail;
         }
@@ -348,7 +349,7 @@ static int curve_at(pde_ctx *C, double g_lo, double g_k, double g_hi, int L, con
         }
         R->sig[j] = v;
     }
-    R->sum_ok = ljgap_curve_summary(G.g, u, G.n, C->psd->m0, &R->sum, w) == LJGAP_OK;
+    R->sum_ok = ljgap__curve_summary(G.g, u, G.n, C->psd->m0, &R->sum, w) == LJGAP_OK;
 end:
     free(u);
     grid_free(&G);
@@ -370,7 +371,7 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
     return d;
 }
 
-int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
+int ljgap__traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
@@ -542,7 +543,7 @@ static int solve_pdf(pde_ctx *C, double g_ave, double g_lo, double g_hi, const d
             memcpy(s, p, n * sizeof *s);
             snaps[M.s[j].snap] = s;
         }
-        if ((j & 31) == 0 && ljgap_should_stop(C->o, C->deadline)) {
+        if ((j & 31) == 0 && ljgap__should_stop(C->o, C->deadline)) {
             st = (C->o->cancel && *C->o->cancel) ? LJGAP_ECANCEL : LJGAP_ECAP;
             goto fail_m;
         }
@@ -605,7 +606,7 @@ static double snap_sigma(const pde_grid *G, const double *p)
     return s;
 }
 
-int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
+int ljgap__pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
                   size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
     pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};

@@ -7,6 +7,7 @@
  * Checks common to every method live here: the theory needs k1 > k0 (19).
  */
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 
 #include <math.h>
 #include <stdlib.h>
@@ -52,11 +53,11 @@ int ljgap_traction(const ljgap_psd *psd, const ljgap_opts *o, const double *g_av
         }
     switch (o->method) {
     case LJGAP_METHOD_PDE:
-        return ljgap_traction_pde(psd, o, g_ave, n, sigma, sum, w);
+        return ljgap__traction_pde(psd, o, g_ave, n, sigma, sum, w);
     case LJGAP_METHOD_PAPER:
-        return ljgap_traction_paper(psd, o, g_ave, n, sigma, sum, w);
+        return ljgap__traction_paper(psd, o, g_ave, n, sigma, sum, w);
     case LJGAP_METHOD_MC:
-        return ljgap_traction_mc(psd, o, g_ave, n, sigma, sum, w);
+        return ljgap__traction_mc(psd, o, g_ave, n, sigma, sum, w);
     }
     return LJGAP_EINVAL;
 }
@@ -78,22 +79,11 @@ int ljgap_pdf_compute(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, c
     if (grid && !(grid[0] < grid[1] && grid[0] > 0 && grid[2] >= 2)) return LJGAP_EINVAL;
     switch (o->method) {
     case LJGAP_METHOD_PDE:
-        return ljgap_pdf_pde(psd, o, g_ave, k2, nk2, grid, out, w);
+        return ljgap__pdf_pde(psd, o, g_ave, k2, nk2, grid, out, w);
     case LJGAP_METHOD_PAPER:
-        return ljgap_pdf_paper(psd, o, g_ave, k2, nk2, grid, out, w);
+        return ljgap__pdf_paper(psd, o, g_ave, k2, nk2, grid, out, w);
     case LJGAP_METHOD_MC:
-        return ljgap_pdf_mc(psd, o, g_ave, k2, nk2, grid, out, w);
+        return ljgap__pdf_mc(psd, o, g_ave, k2, nk2, grid, out, w);
     }
     return LJGAP_EINVAL;
-}
-
-void ljgap_pdf_release(ljgap_pdf *p, size_t n)
-{
-    if (!p) return;
-    for (size_t i = 0; i < n; i++) {
-        free(p[i].g);
-        free(p[i].phi);
-        p[i].g = p[i].phi = NULL;
-        p[i].n = 0;
-    }
 }

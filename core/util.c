@@ -1,9 +1,11 @@
 /* util.c -- status strings, warnings, clocks and defaults shared by the core. */
 #define _POSIX_C_SOURCE 200809L
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 
 #include <gsl/gsl_errno.h>
 #include <stdarg.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -66,8 +68,21 @@ double ljgap_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int ljgap_should_stop(const ljgap_opts *o, double deadline)
+int ljgap__should_stop(const ljgap_opts *o, double deadline)
 {
     if (o && o->cancel && *o->cancel) return 1;
     return ljgap_now() > deadline;
+}
+
+/* The methods (pde.c, paper.c, mc.c) free their partial results with it, and the caller of
+ * ljgap_pdf_compute its answer: it lives here, below them all, not in solve.c above them. */
+void ljgap_pdf_release(ljgap_pdf *p, size_t n)
+{
+    if (!p) return;
+    for (size_t i = 0; i < n; i++) {
+        free(p[i].g);
+        free(p[i].phi);
+        p[i].g = p[i].phi = NULL;
+        p[i].n = 0;
+    }
 }

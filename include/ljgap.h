@@ -178,33 +178,8 @@ int ljgap_pdf_compute(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, c
                       size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
 void ljgap_pdf_release(ljgap_pdf *p, size_t n);
 
-/* ---- curve.c: shared post-processing ---- */
-/* Summary (values only; errors zero) of a traction curve u on increasing gaps g[0..n-1]
- * (dense enough for a cubic spline). The area beyond g[n-1] is E[sigma_work(g+X)] with
- * X ~ N(0, m0_tail). Returns LJGAP_EFAIL with a warning when there is no sign change or
- * no interior maximum. */
-int ljgap_curve_summary(const double *g, const double *u, size_t n, double m0_tail,
-                        ljgap_summary *out, ljgap_warnings *w);
-
-/* ---- solver entry points per method (called by ljgap_traction / ljgap_pdf_compute) ---- */
-int ljgap_traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
-int ljgap_traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                         ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
-int ljgap_traction_mc(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                      ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w);
-int ljgap_pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                  size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
-int ljgap_pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                    size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
-int ljgap_pdf_mc(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                 size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
-
 /* ---- util.c ---- */
 double ljgap_now(void); /* monotonic seconds */
-/* Nonzero when the computation must stop: cancelled, or past deadline (seconds, from
- * ljgap_now). */
-int ljgap_should_stop(const ljgap_opts *o, double deadline);
 
 #ifdef __cplusplus
 }

@@ -3,7 +3,7 @@
  * For the Fig. 2 spectrum at g_ave = 0.98 the paths' step control c leaves a bias in the
  * PDF's traction sigma (measured with 1e5 paths against the PDE's -2.2755238: -0.075 at
  * c = 0.3, -0.016 at the default 0.15, +0.003 at 0.075), seven standard errors at 1e6 paths
- * before ljgap_pdf_mc measured it with a second run at 2c. Same seeds in both runs, so the
+ * before ljgap__pdf_mc measured it with a second run at 2c. Same seeds in both runs, so the
  * measured bias is far less noisy than either run. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -17,6 +17,7 @@
 
 #include "../../core/mc.h"
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 
 #include "check.h"
 

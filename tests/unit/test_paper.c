@@ -13,6 +13,7 @@
 
 #include "../../core/paper.h"
 #include "ljgap.h"
+#include "core.h" /* the core's internals */
 
 #include "check.h"
 
@@ -232,7 +233,7 @@ static void test_fixed_vmax(void **state)
     o.tol = 0.1;
     const double grid[3] = {0.5, 4.0, 3501};
     ljgap_pdf ref;
-    assert_int_equal(ljgap_pdf_pde(&psd, &op, 0.98, &psd.k2, 1, grid, &ref, NULL), LJGAP_OK);
+    assert_int_equal(ljgap__pdf_pde(&psd, &op, 0.98, &psd.k2, 1, grid, &ref, NULL), LJGAP_OK);
     const double vm[4] = {1.0 / 10, 1.0 / 20, 1.0 / 40, 1.0 / 400};
     for (int t = 0; t < 4; t++) {
         o.vmax = vm[t];
