@@ -159,6 +159,8 @@ const LJJobs = (() => {
       const s = await g.json().catch(() => ({}));
       if (g.status !== 200) {
         remember(null);
+        /* 404: the server does not know the job (restarted with another state directory) */
+        if (g.status === 404) return { gone: true, text: "" };
         return { text: `${g.status} ${s.title || ""}: ${s.detail || ""}` };
       }
       state(s, what);
@@ -287,6 +289,16 @@ const LJJobs = (() => {
     $("sim-cancel").disabled = false;
     $("sim-state").textContent = `job ${job.id.slice(0, 8)}… (from before the reload): asking…`;
     const a = await poll(`${job.what} (resumed)`);
+    if (a.gone) {
+      /* a job of another server (or a purged one): forgotten, said once, calmly */
+      current = null;
+      $("sim-start").disabled = false;
+      $("sim-cancel").disabled = true;
+      $("sim-progress").value = 0;
+      $("sim-state").dataset.status = "gone";
+      $("sim-state").textContent = `The job ${job.id.slice(0, 8)}… from before the reload is no longer known to the server (it may have been restarted); start it again if you need it.`;
+      return;
+    }
     if (a.result && job.body) await show(job.body, [{ res: a.result, body: job.body, hybrid: job.body.k_split !== undefined }]);
     finish(a.result ? `done in ${api.fmt(a.elapsed / 1000, 3)} s` : a.text);
   }
