@@ -69,10 +69,12 @@ const LJTopo = (() => {
     if (!line) return;
     const stale = computedFor !== null && inputsLine() !== computedFor;
     line.classList.toggle("stale", stale);
-    line.textContent = computedFor === null ? "" : `computed for: ${computedFor}${stale ? " — the inputs above have changed since: Compute PSD again" : ""}`;
+    line.textContent = computedFor === null ? "" : `computed for: ${computedFor}${computedHow ? `; ${computedHow}` : ""}${stale ? " — the inputs above have changed since: Compute PSD again" : ""}`;
   }
+  let computedHow = ""; /* the server's treatment of the map (detrend, window) */
   function forLine(detrend) {
     computedFor = inputsLine();
+    computedHow = detrend || "";
     api.panels.topo.params = `${computedFor}${detrend ? `; ${detrend}` : ""}`;
     return api.el("div", { class: "meta computed-for", id: "topo-for" });
   }
