@@ -809,7 +809,9 @@
     $("do-traction").checked = true;
     $("do-pdf").checked = true;
     $("do-sweep").checked = false;
-    $("pdf-k2").value = "∞";
+    /* the PDF's k̃2 (dimensionless, as the server reads it): ∞ needs a tail, else the table's end */
+    const chiNow = chiOf(materialObject());
+    $("pdf-k2").value = q.tail || !chiNow ? "∞" : numText(q.k[q.k.length - 1] * chiNow);
     for (const id of ["grid-min", "grid-max", "grid-n"]) $(id).value = "";
     $("method").value = "pde";
     $("preset-note").textContent = `The measured spectrum (${label}) in SI with the material above.`;
