@@ -360,7 +360,7 @@
     return el(
       "table",
       {},
-      el("tr", {}, ...["quantity", "value (units ε, σ0, Δγ)", "± err", ...(hasSI ? ["SI"] : [])].map((h) => el("th", {}, h))),
+      el("tr", {}, ...["quantity", "value (ε, σ0, Δγ)", "± err", ...(hasSI ? ["SI"] : [])].map((h) => el("th", {}, h))),
       row("g̃eq", s.g_eq, e.g_eq, siv("g_eq_m", "m")),
       row("σ̄max/σ0", s.sigma_max, e.sigma_max, siv("sigma_max_Pa", "Pa")),
       row("at g̃ave", s.g_at_max, e.g_at_max, siv("g_at_max_m", "m")),

@@ -150,7 +150,7 @@ const LJTopo = (() => {
 
   function readout(a) {
     const e = a.error;
-    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err (same unit)"].map((h) => api.el("th", {}, h))));
+    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err"].map((h) => api.el("th", {}, h))));
     const row = (name, v, err, unit) => t.append(api.el("tr", {}, api.el("th", {}, name), api.el("td", {}, `${api.fmt(v, 5)}${unit ? ` ${unit}` : ""}`), api.el("td", {}, err === undefined ? "" : `± ${api.errFmt(err)}`)));
     row("h_rms", a.h_rms, e.h_rms, "m");
     row("rms slope", a.rms_slope, e.rms_slope);
@@ -284,7 +284,7 @@ const LJTopo = (() => {
   }
 
   function readoutCombined(c) {
-    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err (same unit)"].map((h) => api.el("th", {}, h))));
+    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err"].map((h) => api.el("th", {}, h))));
     const row = (name, v, err, unit) => t.append(api.el("tr", {}, api.el("th", {}, name), api.el("td", {}, `${api.fmt(v, 5)}${unit ? ` ${unit}` : ""}`), api.el("td", {}, err === undefined ? "" : `± ${api.errFmt(err)}`)));
     if (c.fit) {
       row("D (H = 3 − D)", c.fit.D, c.error.fit.D);
