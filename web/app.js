@@ -10,6 +10,8 @@
  * (requests, answers, series) and PNG (at 2x, with the parameters), or as curl commands that
  * repeat the exact requests. A run empties the cards it did not ask for and marks the others
  * "computed for" their inputs; a problem moves the view and the focus to the first bad field.
+ * Switching "units of the PSD" converts the fields in the PSD's units (k1, k2, the level, a
+ * table, the sweep's values) with the material's χ and ε, and back to the same texts.
  */
 "use strict";
 

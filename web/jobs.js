@@ -2,7 +2,8 @@
  * {id, status, progress, elapsed_ms}; GET /v1/simulations/ID is polled for progress until the
  * status is done (then "result" holds g_ave[], sigma[], error.sigma[], …), failed or cancelled
  * (then "problem"); DELETE cancels. app.js calls LJJobs.init(api) when /openapi.json lists the
- * endpoint; until then the card stays hidden.
+ * endpoint; until then the card stays hidden. A job kept over a reload that the server no longer
+ * knows (404: restarted with another state directory) is forgotten with one calm line.
  *
  * With k̃split the job is the hybrid (the grid carries [k̃1, k̃split], the finer band acts through
  * the statistical theory); "also the full model" then queues a second job without k̃split on its

@@ -21,7 +21,9 @@
  * "Use this spectrum" (issue 30): the psd object between k1 and k2 (one map's or the
  * combination's, P_err and tail kept) goes with the material into the page's calculation
  * (LJApp's useSpectrum): traction, PDF and, with a radius, the pull-off, in SI. An empty or
- * binary file is refused here in one line; a refused map empties the card.
+ * binary file is refused here in one line; a refused map empties the card. The card says what
+ * it was "computed for" (files, dx, dy, periodic, detrend, material) and marks that line once
+ * one of those inputs changes.
  */
 "use strict";
 

@@ -21,7 +21,10 @@
 // map and a combination); a binary file in one line; nothing stale after a preset; a bad field
 // gets the view and the focus; the default simulation starts (202) and is found after a reload;
 // no sideways scrolling at 390 px; the traction CSV is the server's, with units and the summary;
-// the PNG at 2x; SI labels and plots.
+// the PNG at 2x; SI labels and plots; SI mode with the defaults (the fields converted, every
+// request 200, the sweep on an SI axis, back to the same texts); the topography card's "computed
+// for" line marked when its inputs change; a bogus #job= after a reload forgotten quietly (its
+// 404, which Chromium logs, filed as intended like the 422s).
 "use strict";
 
 const { test, before, after } = require("node:test");
