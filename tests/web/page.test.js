@@ -618,6 +618,41 @@ test("issue 30: a height map through \"Use this spectrum\" to traction, PDF and 
   await page.uncheck("#use-material");
 });
 
+test("issue 30: \"Use this spectrum\" of a map whose spectrum has no tail asks the PDF at the table's end", async () => {
+  // a smooth random map (a few long waves and a little noise): its fit is no power law with
+  // 2 < D < 3, so the server's psd object has no tail and the PDF cannot be asked at k̃2 = ∞
+  let seed = 7;
+  const rnd = () => ((seed = (seed * 16807) % 2147483647) / 2147483647);
+  const waves = Array.from({ length: 12 }, () => [2 * Math.PI * (1 + 6 * rnd()) / 64, 2 * Math.PI * rnd(), 2e-9 * (rnd() - 0.5), 2 * Math.PI * rnd()]);
+  const rows = [];
+  for (let j = 0; j < 64; j++) {
+    const row = [];
+    for (let i = 0; i < 64; i++) row.push((waves.reduce((h, [k, th, a, ph]) => h + a * Math.sin(k * (Math.cos(th) * i + Math.sin(th) * j) + ph), 0) + 1e-11 * (rnd() - 0.5)).toExponential(4));
+    rows.push(row.join(" "));
+  }
+  await page.check("#use-material");
+  await page.selectOption("#modulus-kind", "E_star");
+  await page.fill("#E_star", "1e11");
+  await page.setInputFiles("#topo-file", { name: "smooth.txt", mimeType: "text/plain", buffer: Buffer.from(rows.join("\n") + "\n") });
+  await page.fill("#topo-dx", "1e-8");
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of|refused/.test(document.getElementById("status-text").textContent));
+  const topo = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  assert.equal(topo.answers[0].psd.tail, undefined, "a spectrum without a tail");
+  await page.click("#topo-use");
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done|problem|failed/.test(document.getElementById("status-text").textContent), null, { timeout: 60000 });
+  assert.match(await page.textContent("#status-text"), /^Done: 2 requests/);
+  const k2 = (await page.evaluate(() => JSON.parse(LJApp.panelJSON("pdf")))).requests[0].body.k2;
+  const q = topo.answers[0].psd;
+  // k̃2 = χ k_end, χ = 3ε²E*/(16Δγ) = 3.375e-8 m (6 digits)
+  assert.ok(Math.abs(k2[0] / (q.k[q.k.length - 1] * 3.375e-8) - 1) < 1e-5, `k2 ${k2}`);
+  assert.ok((await inked("plot-pdf")) > 500, "PDF canvas is blank");
+  await page.check('input[name="kind"][value="power"]');
+  await page.selectOption("#units", "");
+  await page.fill("#E_star", "1e9");
+  await page.uncheck("#use-material");
+});
+
 test("issue 30: a binary file is one line, not a list of problems; nothing stale stays", async () => {
   const png = Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13, 73, 72, 68, 82]);
   const before = requests.length;
