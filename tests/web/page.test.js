@@ -710,7 +710,8 @@ test("issue 30: the default simulation starts (no 4xx) and its job survives a re
   const id = (await resp.json()).id;
   assert.match(page.url(), new RegExp(`#job=${id}$`));
   await page.reload();
-  await page.waitForFunction((i) => document.getElementById("sim-state").textContent.includes(i.slice(0, 8)), id);
+  // the jobs form is built once /openapi.json has answered: wait for it too
+  await page.waitForFunction((i) => { const e = document.getElementById("sim-state"); return e && e.textContent.includes(i.slice(0, 8)); }, id);
   assert.equal(await page.isDisabled("#sim-cancel"), false);
   await page.click("#sim-cancel");
   await page.waitForFunction(() => /cancelled|done/.test(document.getElementById("sim-state").textContent));
@@ -731,7 +732,7 @@ test("issue 30: SI mode with the defaults converts the fields, every request ans
   assert.match(await page.textContent("#units-note"), /^In SI now: k1, C, the sweep's values, the table converted with χ = 3\.375e-10 m, ε = 3e-10 m/);
   assert.equal(await page.textContent("#sweep-units"), "(values in m²)");
   const statuses = [];
-  const onResp = (r) => r.url().includes("/v1/") && statuses.push(r.status());
+  const onResp = (r) => r.url().includes("/v1/") && r.request().method() === "POST" && statuses.push(r.status());
   page.on("response", onResp);
   assert.match(await runAndWait("#compute"), /^Done: 3 requests/);
   page.off("response", onResp);
