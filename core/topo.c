@@ -626,6 +626,7 @@ static int fit_power(const double *k, const double *P, const double *modes, cons
     f->chi2_red = chi2_red;
     f->noise_floor = 0;
     f->noise_floor_err = 0;
+    f->rolloff = 0;
     return 0;
 }
 
@@ -814,6 +815,72 @@ static int fit_floor(const double *k, const double *P, const double *modes, cons
     return found;
 }
 
+#define TOPO_KNEE_ALPHA                                                                            \
+    1e-3 /* the roll-off's F-test level, the floor's (TOPO_FLOOR_ALPHA): it runs on every map,     \
+          * and a false knee drops the lowest bins */
+#define TOPO_KNEE_CLEAR                                                                            \
+    1.3                    /* the band starts at the first bin whose modes all lie above           \
+                            * TOPO_KNEE_CLEAR k_r */
+#define TOPO_KNEE_STEPS 40 /* the knee's grid: 40 points a decade */
+
+/* A roll-off below the band [a, b] (bins [lo, b] with lo <= a): the law flat below a knee,
+ * P = C max(k, k_r)^s (SurfaceTopography's roll-off), k_r profiled on a grid of
+ * TOPO_KNEE_STEPS a decade from k[lo] up to the lower of √(k[lo] k[b]) and the point that
+ * leaves TOPO_BAND_MIN decades above TOPO_KNEE_CLEAR k_r, the law fitted to ln P on
+ * ln max(k, k_r) over [lo, b] at each. The knee is kept when it lowers χ² significantly
+ * (F(1, n - 3) at TOPO_KNEE_ALPHA, the χ² scaled by max(χ²_red, 1) as the floor's); *kr then
+ * holds it and *first the first bin of [a, b] whose lower edge edge[i] lies at or above
+ * TOPO_KNEE_CLEAR k_r, or, when that leaves less than TOPO_BAND_MIN decades, at or above k_r
+ * (a bin straddling the knee sits above the continued law and, being the band's lowest,
+ * levers its slope: a roll-off always flattens the low end).
+ * 1 when a knee moves the band's start, 0 otherwise (*kr set whenever a knee is kept), -1 out
+ * of memory. */
+static int fit_knee(const double *k, const double *P, const double *modes, const double *rho,
+                    const double *edge, double var_extra, size_t lo, size_t a, size_t b, double *kr,
+                    size_t *first)
+{
+    size_t n = b - lo + 1;
+    *kr = 0;
+    *first = a;
+    if (n < 6 || !edge) return 0;
+    double *kk = malloc(n * sizeof *kk), chi0 = INFINITY, chib = INFINITY, kb = 0, db = 0;
+    if (!kk) return -1;
+    double top = fmin(sqrt(k[lo] * k[b]), k[b] / pow(10, TOPO_BAND_MIN) / TOPO_KNEE_CLEAR);
+    ljgap_topo_fit g;
+    for (int j = -1;; j++) {
+        double K = j < 0 ? 0 : k[lo] * pow(10, (double)(j + 1) / TOPO_KNEE_STEPS);
+        if (j >= 0 && K > top) break;
+        for (size_t i = 0; i < n; i++)
+            kk[i] = fmax(k[lo + i], K);
+        if (fit_power(kk, P + lo, modes + lo, rho ? rho + TOPO_LAGS * lo : NULL, var_extra, n, 0,
+                      INFINITY, &g))
+            continue;
+        double chi = g.chi2_red * ((double)g.bins - 2);
+        if (j < 0) {
+            chi0 = chi;
+            continue;
+        }
+        if (chi < chib) chib = chi, kb = K, db = (double)g.bins - 3;
+    }
+    free(kk);
+    if (!(kb > 0) || !isfinite(chi0) || !(db > 0) ||
+        !((chi0 - chib) / fmax(chib / db, 1) > gsl_cdf_fdist_Pinv(1 - TOPO_KNEE_ALPHA, 1, db)))
+        return 0;
+    *kr = kb;
+    /* the first bin clear of the knee; when that leaves less than TOPO_BAND_MIN decades, the
+     * first whose modes all lie above k_r */
+    for (int pass = 0; pass < 2; pass++) {
+        size_t i = a;
+        while (i <= b && edge[i] < (pass ? 1 : TOPO_KNEE_CLEAR) * kb * (1 - 1e-9))
+            i++;
+        if (i == a) return 0;
+        if (i + 2 > b || log10(k[b] / k[i]) < TOPO_BAND_MIN) continue;
+        *first = i;
+        return 1;
+    }
+    return 0;
+}
+
 /* The power-law band among the bins [lo, hi] (fix_lo, fix_hi: that end is given and stays):
  * of the M windows of contiguous bins at least TOPO_BAND_MIN decades wide, those that are a
  * power law with each test at Z_M = Φ⁻¹(1 - 0.05/(8 M)) (window_fit; 4 tests a window, two
@@ -824,8 +891,8 @@ static int fit_floor(const double *k, const double *P, const double *modes, cons
  * least, not sound; none of those: the fit over [lo, hi], not sound. f filled and 0, or -1
  * when [lo, hi] holds fewer than 3 bins. */
 static int fit_band(const double *k, const double *P, const double *modes, const double *rho,
-                    double var_extra, size_t lo, size_t hi, int fix_lo, int fix_hi,
-                    ljgap_topo_fit *f)
+                    const double *edge, double var_extra, size_t lo, size_t hi, int fix_lo,
+                    int fix_hi, ljgap_topo_fit *f)
 {
     ljgap_topo_fit t, best = {0}, any = {0};
     double z, zany = INFINITY, ZM = INFINITY;
@@ -853,15 +920,29 @@ static int fit_band(const double *k, const double *P, const double *modes, const
     if (found || found_any) {
         *f = found ? best : any;
         f->sound = found && f->D.value > 2 && f->D.value < 3;
-        /* a white floor above the band tilts its upper bins before any test sees it */
         ljgap_topo_fit g;
-        size_t a = lo;
+        size_t a = lo, e = lo, a2;
+        double kr = 0;
         while (a < hi && k[a] < f->kmin * (1 - 1e-9))
             a++;
+        while (e < hi && k[e + 1] <= f->kmax * (1 + 1e-9))
+            e++;
+        /* a roll-off below the band: its knee's bins tilt the band's low end (fit_knee) */
+        if (!fix_lo && found) {
+            int kn = fit_knee(k, P, modes, rho, edge, var_extra, lo, a, e, &kr, &a2);
+            if (kn < 0) return -1;
+            if (kn == 1 && fit_power(k + a2, P + a2, modes + a2, rho ? rho + TOPO_LAGS * a2 : NULL,
+                                     var_extra, e - a2 + 1, 0, INFINITY, &g) == 0) {
+                g.sound = g.D.value > 2 && g.D.value < 3;
+                *f = g, a = a2;
+            }
+        }
+        /* a white floor above the band tilts its upper bins before any test sees it */
         if (!fix_hi && found && fit_floor(k, P, modes, rho, var_extra, a, hi, ZM, &g) == 1) {
             g.sound = g.D.value > 2 && g.D.value < 3;
             *f = g;
         }
+        f->rolloff = kr;
     } else {
         if (fit_power(k + lo, P + lo, modes + lo, rho ? rho + TOPO_LAGS * lo : NULL, var_extra,
                       hi - lo + 1, 0, INFINITY, f))
@@ -1018,7 +1099,7 @@ static int profile_convert(ljgap_topo_result *r, size_t lo, size_t hi, int fix_l
                            ljgap_warnings *w)
 {
     ljgap_topo_fit f1;
-    if (fit_band(r->k, r->PP, r->modes, r->rho, 0, lo, hi, fix_lo, fix_hi, &f1) != 0) {
+    if (fit_band(r->k, r->PP, r->modes, r->rho, r->lo, 0, lo, hi, fix_lo, fix_hi, &f1) != 0) {
         ljgap_warn(w,
                    "topography: the profile has fewer than 3 bins in the band [%g, %g] to "
                    "fit the exponent that converts it to the isotropic PSD",
@@ -1112,7 +1193,7 @@ static int fit_spectrum(ljgap_topo_result *r, const ljgap_topo_opts *o, double v
     }
     if (r->n == 0 || lo >= r->n || hi < lo + 2) return -1;
     if (profile_pp) return profile_convert(r, lo, hi, fix_lo, fix_hi, w) ? -2 : 0;
-    return fit_band(r->k, P, r->modes, r->rho, var_extra, lo, hi, fix_lo, fix_hi, &r->fit);
+    return fit_band(r->k, P, r->modes, r->rho, r->lo, var_extra, lo, hi, fix_lo, fix_hi, &r->fit);
 }
 
 int ljgap_topo_compute(const double *h, const ljgap_topo_grid *g, const ljgap_topo_opts *o,

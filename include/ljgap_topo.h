@@ -83,6 +83,8 @@ typedef struct {
     double noise_floor; /* a white floor N (unit⁴) found above the band, P = C k^(2D-8) + N
                          * fitted with it (core/topo.c: fit_floor); 0: none */
     double noise_floor_err; /* its standard error (the χ² profile's Δχ² = max(χ²_red, 1)) */
+    double rolloff; /* the knee k_r (unit⁻¹) of a roll-off found below the band, P = C max(k,
+                     * k_r)^(2D-8) (core/topo.c: fit_knee; the band starts clear of it); 0: none */
 } ljgap_topo_fit;
 
 typedef struct {

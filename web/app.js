@@ -10,6 +10,8 @@
  * (requests, answers, series) and PNG (at 2x, with the parameters), or as curl commands that
  * repeat the exact requests. A run empties the cards it did not ask for and marks the others
  * "computed for" their inputs; a problem moves the view and the focus to the first bad field.
+ * Switching "units of the PSD" converts the fields in the PSD's units (k1, k2, the level, a
+ * table, the sweep's values) with the material's χ and ε, and back to the same texts.
  */
 "use strict";
 
@@ -356,9 +358,11 @@
     sie = sie || {};
     const pm = (k) => (typeof sie[k] === "number" ? ` ± ${errFmt(sie[k])}` : "");
     const siv = (k, unit) => (si[k] !== undefined ? `${fmt(si[k], 4)}${pm(k)} ${unit}` : undefined);
+    const hasSI = Object.keys(si).length > 0;
     return el(
       "table",
       {},
+      el("tr", {}, ...["quantity", "value (ε, σ0, Δγ)", "± err", ...(hasSI ? ["SI"] : [])].map((h) => el("th", {}, h))),
       row("g̃eq", s.g_eq, e.g_eq, siv("g_eq_m", "m")),
       row("σ̄max/σ0", s.sigma_max, e.sigma_max, siv("sigma_max_Pa", "Pa")),
       row("at g̃ave", s.g_at_max, e.g_at_max, siv("g_at_max_m", "m")),
@@ -444,7 +448,7 @@
     p.xName = "g";
     p.series = [];
     const ro = $("readout-pdf");
-    const t = el("table", {}, el("tr", {}, ...["curve", "mass", "mean", "σ̄/σ0", "± err", "‖ΔΦ‖₁ err"].map((h) => el("th", {}, h))));
+    const t = el("table", {}, el("tr", {}, ...["curve", "mass", "mean g̃ (ε)", "σ̄/σ0", "± err", "‖ΔΦ‖₁ err"].map((h) => el("th", {}, h))));
     const metas = [];
     let c = 0;
     for (const { ans, label } of results) {
@@ -491,33 +495,70 @@
     ro.replaceChildren(t, forLine(p), ...metas);
   }
 
+  /* A sweep's variable in SI and dimensionless: its label with the unit, and the factor
+   * SI value = dimensionless value × factor (api.md "Physical units"; D has none). */
+  function sweepScale(vary, body, ans) {
+    const chi = ans.si && ans.si.chi_m;
+    const eps = body.material && body.material.epsilon;
+    const D = body.psd.D !== undefined ? body.psd.D : 3 - body.psd.H;
+    const f = { m0: eps * eps, k1: 1 / chi, C: eps * eps * Math.pow(chi, 2 * D - 6), D: 1 }[vary];
+    return Number.isFinite(f) && f > 0 ? f : null;
+  }
+  const sweepNames = { m0: "m̃0 (ε²)", C: "C̃", D: "D", k1: "k̃1 (1/χ)" };
+  const sweepNamesSI = { m0: "m0 (m²)", C: "C (m^(2D−4))", D: "D", k1: "k1 (1/m)" };
+
   function showSweep(p, ans, body) {
-    const x = ans.values;
     const r = ans.results;
+    const siReq = body.units === "SI"; /* the values went in SI */
+    const f = ans.si ? sweepScale(ans.vary, body, ans) : null;
+    /* the x axis in SI when the plots are (a material and the switch), else dimensionless */
+    const inSI = f !== null && siPlots(ans);
+    let x = ans.values.map((v) => (inSI === siReq ? v : inSI ? v * f : v / f));
+    let xName = (inSI || (siReq && f === null) ? sweepNamesSI : sweepNames)[ans.vary] || ans.vary;
+    /* uPlot draws nothing on a log axis below about 1e-17: m0 in nm², anything else that small
+     * in units of a power of ten that the label names */
+    const lo = Math.min(...x.filter((v) => v > 0));
+    if (xName === sweepNamesSI.m0) {
+      x = x.map((v) => v * 1e18);
+      xName = "m0 (nm²)";
+    } else if (lo < 1e-12) {
+      const e = Math.floor(Math.log10(lo));
+      x = x.map((v) => v / Math.pow(10, e));
+      xName = `${xName} / 1e${e}`;
+    }
     const get = (k) => r.map((o) => (o ? o[k] : null));
     const errs = (k) => r.map((o) => (o && o.error ? o.error[k] : null));
-    const names = { m0: "m̃0", C: "C", D: "D", k1: "k̃1" };
-    p.xName = ans.vary;
+    p.xName = xName;
     p.series = [
       { name: "Δγeff/Δγ", x, y: get("dgamma_eff"), err: errs("dgamma_eff"), color: COLORS[0], points: true },
       { name: "σ̄max/σ0", x, y: get("sigma_max"), err: errs("sigma_max"), color: COLORS[1], points: true },
     ];
     const logX = ans.vary !== "D" && x.every((v) => v > 0);
     LJPlots.draw($("plot-sweep"), {
-      title: `${plotTitles.sweep} over ${names[ans.vary] || ans.vary}`,
-      xLabel: names[ans.vary] || ans.vary,
-      xName: names[ans.vary] || ans.vary,
-      yLabel: "Δγeff/Δγ, σ̄max/σ0",
+      title: `${plotTitles.sweep} over ${xName}`,
+      xLabel: xName,
+      xName,
+      yLabel: "Δγeff/Δγ, σ̄max/σ0 (ratios)",
       xLog: logX,
+      /* an explicit range: uPlot's own log range fails on values as small as 1e-20 (m0 in m²) */
+      xRange: logX ? [Math.min(...x) / 1.3, Math.max(...x) * 1.3] : undefined,
       series: p.series,
       params: p.params,
       yZero: true,
     });
-    const t = el("table", {}, el("tr", {}, ...[names[ans.vary] || ans.vary, "g̃eq", "σ̄max/σ0", "Δγeff/Δγ", "largest ± err"].map((h) => el("th", {}, h))));
+    const sir = (ans.si && ans.si.results) || [];
+    const heads = [xName, "g̃eq (ε)", "σ̄max/σ0", "Δγeff/Δγ", "largest ± err (of the three)"];
+    if (sir.length) heads.push("geq (m)", "σ̄max (Pa)", "Δγeff (J/m²)");
+    const t = el("table", {}, el("tr", {}, ...heads.map((h) => el("th", {}, h))));
     r.forEach((o, i) => {
       const e = (o && o.error) || {};
       const worst = Math.max(...["g_eq", "sigma_max", "dgamma_eff"].map((k) => Math.abs(e[k] || 0)));
-      t.append(el("tr", {}, el("td", {}, fmt(x[i])), el("td", {}, fmt(o && o.g_eq)), el("td", {}, fmt(o && o.sigma_max)), el("td", {}, fmt(o && o.dgamma_eff)), el("td", {}, errFmt(worst))));
+      const tr = el("tr", {}, el("td", {}, fmt(x[i])), el("td", {}, fmt(o && o.g_eq)), el("td", {}, fmt(o && o.sigma_max)), el("td", {}, fmt(o && o.dgamma_eff)), el("td", {}, errFmt(worst)));
+      if (sir.length) {
+        const q = sir[i];
+        tr.append(el("td", {}, fmt(q && q.g_eq_m, 4)), el("td", {}, fmt(q && q.sigma_max_Pa, 4)), el("td", {}, fmt(q && q.dgamma_eff_J_m2, 4)));
+      }
+      t.append(tr);
     });
     const worstAll = Math.max(...r.map((o) => Math.max(...Object.values((o && o.error) || {}).map(Math.abs))));
     const details = el("details", {}, el("summary", {}, `${x.length} points, largest error ${errFmt(worstAll)}: table`), t);
@@ -568,8 +609,8 @@
       p.series = [{ name: `C k^(2D−8), D = ${fmt(D)}`, x: kk, y: kk.map((k) => C * Math.pow(k, 2 * D - 8)), color: COLORS[0] }];
       marks.push({ type: "vline", x: k1, label: si ? "k1" : "k̃1", color: "#2e933c" });
       if (k2 !== null) marks.push({ type: "vline", x: k2, label: si ? "k2" : "k̃2", color: "#2e933c" });
-      else notes.push("k̃2 = ∞: drawn to 1000 k̃1");
-      notes.push(`C = ${fmt(C)}${psd.C === undefined ? " (from the level given)" : ""}`);
+      else notes.push(si ? "k2 = ∞: drawn to 1000 k1" : "k̃2 = ∞: drawn to 1000 k̃1");
+      notes.push(`C = ${fmt(C)}${si ? ` m^${fmt(2 * D - 4, 3)}` : ""}${psd.C === undefined ? " (from the level given)" : ""}`);
     }
     if (k0 !== null) marks.push({ type: "vline", x: k0, label: si ? "k0 = 0.46978/χ" : "k̃0 (instability)", color: "#d1495b", dash: [2, 3], row: 1 });
     if (traction) notes.push(`m̃0 = ${fmt(traction.summary.m0)} (server)`);
@@ -764,11 +805,15 @@
     $("table").value = [`# ${label}`, head, ...rows].join("\n");
     $("tail").value = q.tail ? String(q.tail.exponent) : "";
     loadedTail = q.tail || null;
+    if (unitsNow !== "SI") convertFields(true, { table: false }); /* the power law's fields and the sweep follow */
     $("units").value = "SI";
+    unitsNow = "SI";
     $("do-traction").checked = true;
     $("do-pdf").checked = true;
     $("do-sweep").checked = false;
-    $("pdf-k2").value = "∞";
+    /* the PDF's k̃2 (dimensionless, as the server reads it): ∞ needs a tail, else the table's end */
+    const chiNow = chiOf(materialObject());
+    $("pdf-k2").value = q.tail || !chiNow ? "∞" : numText(q.k[q.k.length - 1] * chiNow);
     for (const id of ["grid-min", "grid-max", "grid-n"]) $(id).value = "";
     $("method").value = "pde";
     $("preset-note").textContent = `The measured spectrum (${label}) in SI with the material above.`;
@@ -974,6 +1019,8 @@
       if (e.type === "checkbox") e.checked = v;
       else e.value = v;
     }
+    unitsNow = $("units").value; /* a preset's values are in its own units */
+    $("units-note").textContent = "";
     syncVisibility();
   }
 
@@ -1009,7 +1056,122 @@
     for (const o of $("level-kind").options) o.textContent = levels[o.value];
     const vary = si ? { m0: "m0 (m²)", C: "C (SI)", D: "D", k1: "k1 (1/m)" } : { m0: "m̃0", C: "C", D: "D", k1: "k̃1" };
     for (const o of $("vary").options) o.textContent = vary[o.value];
-    $("sweep-units").textContent = si ? "values in SI, as the PSD" : "";
+    const unit = si ? { m0: "m²", C: "m^(2D−4)", D: "", k1: "1/m" }[$("vary").value] : "";
+    $("sweep-units").textContent = unit ? `(values in ${unit})` : "";
+  }
+
+  /* A converted value as the text of a field: 6 significant digits, no trailing zeros. */
+  function numText(x) {
+    const a = Math.abs(x);
+    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return x.toExponential(5).replace(/\.?0+e/, "e").replace("e+", "e");
+    return String(Number(x.toPrecision(6)));
+  }
+
+  /* The PSD's D as the form gives it (D, or 3 − H); null when it is no number. */
+  function formD() {
+    const v = field("exp");
+    if (typeof v !== "number") return null;
+    return $("exp-kind").value === "H" ? 3 - v : v;
+  }
+
+  /* Switching "units of the PSD" converts every field in the PSD's units (api.md "Physical
+   * units", core/units.c) with the material's χ and ε: k = k̃/χ, C = C̃ ε² χ^(2D−6), m0 = m̃0 ε²,
+   * h_rms = h̃ ε, a table's P = P̃ ε² χ², and the sweep's values as its variable. Back again, a
+   * field still holding the converted text gets its text from before (no rounding drift). The
+   * gaps, the PDF's k̃2 list and the grids stay dimensionless (the server reads them so). */
+  let lastConversion = null; /* {to, chi, eps, before: {id: text}, after: {id: text}} */
+  function convertFields(toSI, opts = {}) {
+    const m = materialObject();
+    const chi = chiOf(m);
+    const eps = m && typeof m.epsilon === "number" && m.epsilon > 0 ? m.epsilon : null;
+    if (!chi || !eps) return null;
+    const D = formD();
+    const f = toSI ? 1 : -1; /* exponent of each scale: SI = dimensionless × scale^f */
+    const scale = {
+      k: Math.pow(chi, -f),
+      m0: Math.pow(eps, 2 * f),
+      h_rms: Math.pow(eps, f),
+      C: D === null ? null : Math.pow(eps * eps * Math.pow(chi, 2 * D - 6), f),
+      D: 1,
+      P: Math.pow(eps * eps * chi * chi, f),
+    };
+    const kinds = [$("level-kind").value, $("vary").value, $("exp-kind").value, $("exp").value].join("|");
+    const same = lastConversion && lastConversion.to === (toSI ? "" : "SI") && lastConversion.chi === chi && lastConversion.eps === eps && lastConversion.kinds === kinds;
+    const before = {};
+    const after = {};
+    const skipped = [];
+    const set = (id, compute) => {
+      const old = $(id).value;
+      let text;
+      if (same && lastConversion.after[id] === old && lastConversion.before[id] !== undefined) text = lastConversion.before[id];
+      else text = compute(old);
+      if (text === null) return;
+      before[id] = old;
+      after[id] = text;
+      $(id).value = text;
+    };
+    const one = (x, k) => {
+      const v = val(x);
+      if (typeof v !== "number") return null;
+      if (scale[k] === null) {
+        skipped.push(k);
+        return null;
+      }
+      return numText(v * scale[k]);
+    };
+    set("k1", (t) => one(t, "k"));
+    if (!$("k2-inf").checked) set("k2", (t) => one(t, "k"));
+    set("level", (t) => one(t, $("level-kind").value));
+    const vary = $("vary").value;
+    set("values", (t) => {
+      const xs = list(t);
+      if (!xs.length || !xs.every((x) => typeof x === "number")) return null;
+      if (vary === "C" && scale.C === null) return skipped.push("C"), null;
+      const k = vary === "k1" ? "k" : vary;
+      return xs.map((x) => numText(x * scale[k])).join(", ");
+    });
+    if (opts.table !== false) {
+      set("table", (t) => {
+        let q;
+        try {
+          q = parseTable(t);
+        } catch (e) {
+          return null;
+        }
+        const head = toSI ? `k [1/m], P [m^4]${q.P_err ? ", P_err [m^4]" : ""}` : `k̃, P̃S${q.P_err ? ", P̃S_err" : ""}`;
+        const rows = q.k.map((k, i) => [k * scale.k, q.P[i] * scale.P, ...(q.P_err ? [q.P_err[i] * scale.P] : [])].map(numText).join(", "));
+        return [`# converted ${toSI ? "to SI" : "to dimensionless"} with χ = ${numText(chi)} m, ε = ${numText(eps)} m`, head, ...rows].join("\n");
+      });
+    }
+    lastConversion = { to: toSI ? "SI" : "", chi, eps, kinds, before, after };
+    return { chi, eps, changed: Object.keys(after), skipped };
+  }
+
+  /* The "units of the PSD" select changed: SI needs the material (switched on), and the fields
+   * in the PSD's units follow; a material whose numbers are not usable keeps the old units. */
+  let unitsNow = "";
+  function onUnits() {
+    const toSI = $("units").value === "SI";
+    if (toSI === (unitsNow === "SI")) return syncVisibility();
+    if (toSI && !$("use-material").checked) $("use-material").checked = true;
+    const done = convertFields(toSI);
+    if (!done) {
+      $("units").value = unitsNow;
+      syncVisibility();
+      showFieldError("units", "give the material's E*, Δγ and ε as numbers first: the fields are converted with its χ and ε");
+      return;
+    }
+    unitsNow = $("units").value;
+    syncVisibility();
+    const names = { k1: "k1", k2: "k2", level: $("level-kind").value, values: "the sweep's values", table: "the table" };
+    const what = done.changed.map((id) => names[id]).join(", ");
+    const note = `${toSI ? "In SI" : "Dimensionless"} now${what ? `: ${what} converted with χ = ${numText(done.chi)} m, ε = ${numText(done.eps)} m` : ""}${done.skipped.length ? " (C not converted: D is no number)" : ""}; the gaps and the PDF's k̃2 stay dimensionless.`;
+    $("units-note").textContent = note;
+    try {
+      showPsd(common(), null);
+    } catch (e) {
+      /* a table that does not parse: the picture waits */
+    }
   }
 
   function syncVisibility() {
@@ -1075,7 +1237,8 @@
       b.addEventListener("click", () => applyPreset(b.dataset.preset));
     }
     $("cancel").addEventListener("click", () => abort && abort.abort());
-    for (const id of ["k2-inf", "method", "use-material", "modulus-kind", "units"]) $(id).addEventListener("change", syncVisibility);
+    for (const id of ["k2-inf", "method", "use-material", "modulus-kind", "vary"]) $(id).addEventListener("change", syncVisibility);
+    $("units").addEventListener("change", onUnits);
     for (const id of ["E_star", "E1", "nu1", "E2", "nu2", "dgamma", "epsilon"]) $(id).addEventListener("input", syncUnits);
     for (const r of document.querySelectorAll('input[name="kind"]')) r.addEventListener("change", syncVisibility);
     $("table-file").addEventListener("change", async () => {

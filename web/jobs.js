@@ -2,7 +2,8 @@
  * {id, status, progress, elapsed_ms}; GET /v1/simulations/ID is polled for progress until the
  * status is done (then "result" holds g_ave[], sigma[], error.sigma[], …), failed or cancelled
  * (then "problem"); DELETE cancels. app.js calls LJJobs.init(api) when /openapi.json lists the
- * endpoint; until then the card stays hidden.
+ * endpoint; until then the card stays hidden. A job kept over a reload that the server no longer
+ * knows (404: restarted with another state directory) is forgotten with one calm line.
  *
  * With k̃split the job is the hybrid (the grid carries [k̃1, k̃split], the finer band acts through
  * the statistical theory); "also the full model" then queues a second job without k̃split on its
@@ -159,6 +160,8 @@ const LJJobs = (() => {
       const s = await g.json().catch(() => ({}));
       if (g.status !== 200) {
         remember(null);
+        /* 404: the server does not know the job (restarted with another state directory) */
+        if (g.status === 404) return { gone: true, text: "" };
         return { text: `${g.status} ${s.title || ""}: ${s.detail || ""}` };
       }
       state(s, what);
@@ -287,6 +290,16 @@ const LJJobs = (() => {
     $("sim-cancel").disabled = false;
     $("sim-state").textContent = `job ${job.id.slice(0, 8)}… (from before the reload): asking…`;
     const a = await poll(`${job.what} (resumed)`);
+    if (a.gone) {
+      /* a job of another server (or a purged one): forgotten, said once, calmly */
+      current = null;
+      $("sim-start").disabled = false;
+      $("sim-cancel").disabled = true;
+      $("sim-progress").value = 0;
+      $("sim-state").dataset.status = "gone";
+      $("sim-state").textContent = `The job ${job.id.slice(0, 8)}… from before the reload is no longer known to the server (it may have been restarted); start it again if you need it.`;
+      return;
+    }
     if (a.result && job.body) await show(job.body, [{ res: a.result, body: job.body, hybrid: job.body.k_split !== undefined }]);
     finish(a.result ? `done in ${api.fmt(a.elapsed / 1000, 3)} s` : a.text);
   }

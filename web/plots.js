@@ -136,7 +136,7 @@ const LJPlots = (() => {
           const e = Math.round(Math.log10(v));
           return e >= -2 && e <= 3 ? String(Number(Math.pow(10, e).toPrecision(1))) : `1e${e}`;
         }
-        return fmt(v, 4);
+        return fmt(v, 4).replace(/\.?0+e/, "e"); /* 2e+10, not 2.000e+10 */
       });
   }
 

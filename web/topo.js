@@ -21,7 +21,9 @@
  * "Use this spectrum" (issue 30): the psd object between k1 and k2 (one map's or the
  * combination's, P_err and tail kept) goes with the material into the page's calculation
  * (LJApp's useSpectrum): traction, PDF and, with a radius, the pull-off, in SI. An empty or
- * binary file is refused here in one line; a refused map empties the card.
+ * binary file is refused here in one line; a refused map empties the card. The card says what
+ * it was "computed for" (files, dx, dy, periodic, detrend, material) and marks that line once
+ * one of those inputs changes.
  */
 "use strict";
 
@@ -42,6 +44,41 @@ const LJTopo = (() => {
     const m = dx === undefined ? api.materialObject() : null; /* several maps: the whole band */
     for (const [k, v] of Object.entries(m || {})) if (v !== undefined && v !== null) q.set(k, String(v));
     return q.toString();
+  }
+
+  /* The inputs of the card as one line (its "computed for"): the file(s) with their dx, dy,
+   * periodic and, for one map, the material. */
+  function inputsLine() {
+    const files = [...$("topo-file").files];
+    const parts = [];
+    if (files.length > 1) {
+      parts.push(files.map((f, i) => `${f.name} (dx = ${$(`topo-dx-${i}`) ? $(`topo-dx-${i}`).value.trim() : $("topo-dx").value.trim()} m)`).join(", "));
+    } else {
+      parts.push(files.length ? files[0].name : "no file");
+      parts.push(`dx = ${$("topo-dx").value.trim()} m`);
+      parts.push(`dy = ${$("topo-dy").value.trim() === "" ? "dx" : `${$("topo-dy").value.trim()} m`}`);
+    }
+    parts.push($("topo-periodic").checked ? "periodic" : "not periodic");
+    const m = api.materialObject();
+    parts.push(m ? `material ${Object.entries(m).map(([k, v]) => `${k} = ${v}`).join(", ")}` : "no material");
+    return parts.join("; ");
+  }
+
+  let computedFor = null; /* inputsLine() of the card's result, null when it has none */
+  /* The card's "computed for" line; when the inputs have changed since, it says so. */
+  function markStale() {
+    const line = $("topo-for");
+    if (!line) return;
+    const stale = computedFor !== null && inputsLine() !== computedFor;
+    line.classList.toggle("stale", stale);
+    line.textContent = computedFor === null ? "" : `computed for: ${computedFor}${computedHow ? `; ${computedHow}` : ""}${stale ? " — the inputs above have changed since: Compute PSD again" : ""}`;
+  }
+  let computedHow = ""; /* the server's treatment of the map (detrend, window) */
+  function forLine(detrend) {
+    computedFor = inputsLine();
+    computedHow = detrend || "";
+    api.panels.topo.params = `${computedFor}${detrend ? `; ${detrend}` : ""}`;
+    return api.el("div", { class: "meta computed-for", id: "topo-for" });
   }
 
   /* Several files: a dx field for each (the card's dx to start with). */
@@ -115,7 +152,7 @@ const LJTopo = (() => {
 
   function readout(a) {
     const e = a.error;
-    const t = api.el("table", {});
+    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err"].map((h) => api.el("th", {}, h))));
     const row = (name, v, err, unit) => t.append(api.el("tr", {}, api.el("th", {}, name), api.el("td", {}, `${api.fmt(v, 5)}${unit ? ` ${unit}` : ""}`), api.el("td", {}, err === undefined ? "" : `± ${api.errFmt(err)}`)));
     row("h_rms", a.h_rms, e.h_rms, "m");
     row("rms slope", a.rms_slope, e.rms_slope);
@@ -128,13 +165,15 @@ const LJTopo = (() => {
     const notes = [`${g.nx} × ${g.ny} heights, ${g.periodic ? "periodic (mean removed, no window)" : `${g.detrend} removed, Hann window`}; bins ${api.fmt(a.k[0], 4)} … ${api.fmt(a.k[a.k.length - 1], 4)} 1/m`];
     if (a.domain) notes.push(`theory's domain k > k0/χ = ${api.fmt(a.domain.k0, 4)} 1/m: ${a.domain.inside} of the band; proposed k1 = ${api.fmt(a.domain.k1, 4)} 1/m (k̃1 = ${api.fmt(a.domain.k1_dimensionless, 4)})`);
     else notes.push("give a material above to see the theory's domain and compute the adhesion");
-    $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), api.metaLine(a), ...api.warnings(a));
+    $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), forLine(g.periodic ? "mean removed" : `${g.detrend} removed, Hann window`), api.metaLine(a), ...api.warnings(a));
+    markStale();
   }
 
   /* The height map was answered with a problem: beside the fields, and in the readout. */
   function refused(status, json) {
     psd = null;
     measured = [];
+    computedFor = null;
     /* nothing of the map before stays on the card */
     api.emptyPanel("topo");
     $("topo-k1").value = "";
@@ -211,7 +250,8 @@ const LJTopo = (() => {
     if ($("topo-file").files.length > 1) return computeCombined([...$("topo-file").files]);
     measured = [];
     $("topo-combined").hidden = true;
-    const p = api.resetPanel("topo");
+    fresh();
+    const p = api.panels.topo;
     $("card-topo").hidden = false;
     api.setBusy(`psd of ${f.name}`);
     const a = await upload(p, f, query(), "psd");
@@ -246,7 +286,7 @@ const LJTopo = (() => {
   }
 
   function readoutCombined(c) {
-    const t = api.el("table", {});
+    const t = api.el("table", {}, api.el("tr", {}, ...["quantity", "value (SI)", "± err"].map((h) => api.el("th", {}, h))));
     const row = (name, v, err, unit) => t.append(api.el("tr", {}, api.el("th", {}, name), api.el("td", {}, `${api.fmt(v, 5)}${unit ? ` ${unit}` : ""}`), api.el("td", {}, err === undefined ? "" : `± ${api.errFmt(err)}`)));
     if (c.fit) {
       row("D (H = 3 − D)", c.fit.D, c.error.fit.D);
@@ -261,7 +301,8 @@ const LJTopo = (() => {
       const d = c.domain;
       notes.push(`theory's domain k > k0/χ = ${api.fmt(d.k0, 4)} 1/m: ${d.inside} of the combined band (${api.fmt(100 * d.fraction, 3)} %); the psd object starts at k1 = ${api.fmt(d.k1, 4)} 1/m${d.h_rms === null ? "" : `, h_rms = ${api.fmt(d.h_rms, 4)} m`}`);
     }
-    $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), api.metaLine(c), ...api.warnings(c));
+    $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), forLine(), api.metaLine(c), ...api.warnings(c));
+    markStale();
   }
 
   /* The combination as CSV with units. */
@@ -276,9 +317,20 @@ const LJTopo = (() => {
     return lines.join("\n") + "\n";
   }
 
+  /* A new computation: nothing of the previous result stays on the card meanwhile. */
+  function fresh() {
+    psd = null;
+    computedFor = null;
+    api.emptyPanel("topo");
+    $("readout-topo").textContent = "Computing the PSD …";
+    $("readout-topo-adhesion").replaceChildren();
+    api.updateExports();
+  }
+
   /* Several files: each one's PSD, then their combination. */
   async function computeCombined(files) {
-    const p = api.resetPanel("topo");
+    fresh();
+    const p = api.panels.topo;
     measured = [];
     psd = null;
     $("card-topo").hidden = false;
@@ -470,7 +522,9 @@ const LJTopo = (() => {
       if (psd && measured.length) api.download("ljgap-topo-combined.csv", new Blob([combinedCSV()], { type: "text/csv" }));
     });
     for (const id of ["topo-k1", "topo-k2"]) $(id).addEventListener("change", () => psd && draw());
+    /* any change of the card's inputs (or the material) marks its result */
+    for (const ev of ["input", "change"]) document.addEventListener(ev, () => computedFor !== null && markStale());
   }
 
-  return { init, spectrum, cut, query, refused, psdObject, combinedCSV, psdCSV, notText };
+  return { init, spectrum, cut, query, refused, psdObject, combinedCSV, psdCSV, notText, inputsLine };
 })();
