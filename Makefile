@@ -63,8 +63,9 @@ endif
 VERSION := $(shell sed -n 's/^\#define LJGAP_VERSION "\(.*\)"/\1/p' include/ljgap.h)
 SOMAJOR := $(firstword $(subst ., ,$(VERSION)))
 
-# core/: the numerical library; core/sim/ the discrete numerical model and the hybrid
-CORE_SRC := $(wildcard core/*.c core/sim/*.c)
+# core/: the numerical library; core/sim/ the discrete numerical model and the hybrid; core/topo/
+# measured topographies' PSDs
+CORE_SRC := $(wildcard core/*.c core/sim/*.c core/topo/*.c)
 # server/: the request layer (api/: the handler, validation, answers, CSV, problems) and the job
 # store (jobs/), in one archive; the CLI (cli/) and the daemon (ljgapd/) link it.
 SERVER_SRC := $(wildcard server/api/*.c server/jobs/*.c)
@@ -98,7 +99,7 @@ OPT ?= -O2
 CFLAGS ?= $(OPT) -g
 WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
         -Wno-unused-parameter
-ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Icore -Icore/sim \
+ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Icore -Icore/sim -Icore/topo \
               -Iserver/api -Iserver/jobs -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
 LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm

@@ -12,7 +12,7 @@
  * Hann window with its variance correction (non-periodic), takes the FFT (FFTW3), averages the
  * periodogram over logarithmic bins of |k|, and fits a power law P = C k^(2D-8) to the bins.
  * A map with one row (or one column) is a profile: its 1-D PSD is turned into the isotropic one
- * by the power-law form of the inverse Abel transform (core/topo.c explains and the tests check
+ * by the power-law form of the inverse Abel transform (core/topo/topo.c explains and the tests check
  * it on the rows of a synthetic isotropic surface). Every number has an error estimate.
  *
  * Knows nothing of JSON, HTTP or materials; returns a status like every core call.
@@ -81,17 +81,17 @@ typedef struct {
     int sound;          /* 1: the bins in the band are a power law (χ²_red and curvature within
                          * their statistical bounds) and 2 < D < 3; 0: a warning says why not */
     double noise_floor; /* a white floor N (unit⁴) found above the band, P = C k^(2D-8) + N
-                         * fitted with it (core/topo.c: fit_floor); 0: none */
+                         * fitted with it (core/topo/topo.c: fit_floor); 0: none */
     double noise_floor_err; /* its standard error (the χ² profile's Δχ² = max(χ²_red, 1)) */
     double rolloff; /* the knee k_r (unit⁻¹) of a roll-off found below the band, P = C max(k,
-                     * k_r)^(2D-8) (core/topo.c: fit_knee; the band starts clear of it); 0: none */
+                     * k_r)^(2D-8) (core/topo/topo.c: fit_knee; the band starts clear of it); 0: none */
 } ljgap_topo_fit;
 
 typedef struct {
     size_t n;      /* non-empty bins, increasing k */
     double *k;     /* owned: mean |k| of the bin's modes */
     double *P;     /* owned: isotropic 2-D PSD (mean periodogram of the bin) */
-    double *P_err; /* owned: standard error of P (see core/topo.c: modes and window) */
+    double *P_err; /* owned: standard error of P (see core/topo/topo.c: modes and window) */
     double *modes; /* owned: independent modes behind each bin (window-corrected) */
     double *lo;    /* owned: lower edge of the band the bin's modes cover (the lattice's count
                     * of cells: π lo² = cells below the bin, a profile 2 lo = cells × Δk) */

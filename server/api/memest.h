@@ -8,7 +8,7 @@
  *
  *   text PSD of N heights  topo_text.c parses into a doubling array (at most 2 x 8N bytes; it
  *                          grows in place: ljgapd maps large blocks, so realloc moves pages),
- *                          the request keeps it, core/topo.c copies the heights once (8N),
+ *                          the request keeps it, core/topo/topo.c copies the heights once (8N),
  *                          transforms them into a complex array ((nx/2+1) x ny x 16 <= 8N +
  *                          16 ny) and keeps a bin index (2 bytes a point): 33 bytes a height
  *                          and FFTW's scratch are bounded by 40, plus 4 MiB for the plan, the

@@ -1,4 +1,4 @@
-/* psd.c -- POST /v1/psd: a measured height map's PSD as the answer (issue 15, core/topo.c).
+/* psd.c -- POST /v1/psd: a measured height map's PSD as the answer (issue 15, core/topo/topo.c).
  *
  * The runner of the psd endpoint, out of handler.c: the bins, the fit and the reliable band of
  * ljgap_topo_compute written as docs/api.md fixes them, and the psd object ready for the adhesion

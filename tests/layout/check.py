@@ -18,11 +18,11 @@ import sys
 
 ROOTS = ["core", "include", "server", "tools"]
 # the Makefile's -I folders, in its order
-INCLUDE_DIRS = ["include", "core", "core/sim", "server/api", "server/jobs", "server/ljgapd"]
+INCLUDE_DIRS = ["include", "core", "core/sim", "core/topo", "server/api", "server/jobs", "server/ljgapd"]
 MAX_LINES = 900
 MAX_C_FILES = 16
 # Over MAX_LINES still, each to be split along its seams (issue 27): they may not grow meanwhile.
-PENDING = {"core/topo.c": 1480, "server/jobs/jobstore_pg.c": 1031}
+PENDING = {"server/jobs/jobstore_pg.c": 1031}
 
 
 def report(ok, what, detail=""):

@@ -1,4 +1,4 @@
-/* test_combine.c -- several measured PSDs as one (core/topo_combine.c, server/api/combine.c).
+/* test_combine.c -- several measured PSDs as one (core/topo/topo_combine.c, server/api/combine.c).
  *
  * The core: a known power law split into two overlapping noisy tables comes back; a gap
  * between bands is reported; inverse-variance weighting against its formula on two constant

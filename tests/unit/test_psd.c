@@ -799,7 +799,7 @@ static void *worker(void *p)
 }
 
 /* psd plans FFTs on compute threads while a simulation plans its own: FFTW's planner must be
- * serialised across modules (core/topo.c makes it thread-safe). */
+ * serialised across modules (core/topo/topo.c makes it thread-safe). */
 static void concurrent_with_simulation(void **state)
 {
     map m = make_map(96, 80, 1e-8, 2.5, 1e-9, 17);

@@ -1,4 +1,4 @@
-/* test_topo.c -- core/topo.c: the isotropic PSD of a height map, against synthetic surfaces of
+/* test_topo.c -- core/topo/topo.c: the isotropic PSD of a height map, against synthetic surfaces of
  * known PSD (tests/lib/synth.h, core/sim/sim.c's conventions: fixed amplitudes √(P Δq²), random
  * phases, so the periodogram is the law at every wavevector).
  *
@@ -93,7 +93,7 @@ static void periodic_power_law(void **state)
     assert_true(r.h_rms.err > 0 && r.h_rms.err < r.h_rms.value); /* the first modes dominate */
     assert_true(r.rms_slope.err > 0 && r.rms_slope.err < 0.01 * r.rms_slope.value);
     /* P in every bin within 1 % of the law at the bin's k (the bin's mean periodogram, corrected
-     * for the law's curvature across the bin, 3 % here; see core/topo.c) */
+     * for the law's curvature across the bin, 3 % here; see core/topo/topo.c) */
     double worst = 0;
     for (size_t i = 0; i < r.n; i++) {
         double dev = fabs(r.P[i] / synth_P(&l, r.k[i]) - 1);
