@@ -16,6 +16,7 @@
 #include "handler.h"
 #include "ljgap_topo.h"
 #include "request.h"
+#include "topo_text.h"
 
 #include "../tests/lib/synth.h"
 

@@ -49,6 +49,8 @@
 #include "ljgap_topo.h"
 #include "problems.h"
 #include "request.h"
+#include "textbuf.h"   /* ljgap_utf8_span */
+#include "topo_text.h" /* the text upload of psd */
 
 #include <math.h>
 #include <pthread.h>

@@ -27,6 +27,7 @@
  * below (ljgap_v_*).
  */
 #include "request.h"
+#include "textbuf.h" /* ljgap_utf8_span */
 
 #include <math.h>
 #include <stdarg.h>
@@ -78,35 +79,6 @@ void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
         return;
     }
     cJSON_AddItemToArray(e->errors, item);
-}
-
-size_t ljgap_utf8_span(const char *s, size_t n)
-{
-    const unsigned char *u = (const unsigned char *)s;
-    size_t i = 0;
-    while (i < n) {
-        unsigned c = u[i], need, cp, min;
-        if (c < 0x80) {
-            i++;
-            continue;
-        }
-        if (c >= 0xC2 && c <= 0xDF)
-            need = 1, cp = c & 0x1F, min = 0x80;
-        else if (c >= 0xE0 && c <= 0xEF)
-            need = 2, cp = c & 0x0F, min = 0x800;
-        else if (c >= 0xF0 && c <= 0xF4)
-            need = 3, cp = c & 0x07, min = 0x10000;
-        else
-            return i;
-        if (n - i <= need) return i;
-        for (unsigned k = 1; k <= need; k++) {
-            if ((u[i + k] & 0xC0) != 0x80) return i;
-            cp = cp << 6 | (u[i + k] & 0x3F);
-        }
-        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return i;
-        i += need + 1;
-    }
-    return n;
 }
 
 /* Bytes of s to quote in a message: at most max, whole characters only. */

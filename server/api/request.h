@@ -116,29 +116,10 @@ void ljgap_request_free(ljgap_request *rq);
 int ljgap_request_parse_text(const cJSON *root, ljgap_topo_spec *heights, const ljgap_limits *lim,
                              ljgap_request *rq, ljgap_verr *e);
 
-/* ---- topo_text.c: the plain-text form of POST /v1/psd ---- */
-/* Parses a matrix of heights (m): one row a line, values separated by white space or one comma,
- * '#' to the end of a line a comment, blank lines skipped, CR LF accepted. Every bad value is a
- * problem at /topography/heights/ROW/COL whose detail names the line and column (1-based), a
- * row of the wrong length one at /topography/heights/ROW. Stops after max_points values or
- * LJGAP_MAX_ERRORS problems. t->h, t->nx, t->ny receive the matrix (t->h may be NULL). */
-void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljgap_topo_spec *t,
-                           ljgap_verr *e);
-/* The query parameters as a request root {"topography": {...}, "material": {...}}: dx, dy
- * (numbers), periodic (true/false/1/0, or no value: true) and the material's fields (numbers);
- * a value that is none of these goes in as a string (request.c refuses it at the field's
- * pointer). An unknown or repeated parameter is a problem at its pointer (/topography/dx,
- * /material/E_star; /NAME for an unknown one). NULL when out of memory. */
-cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e);
-
 /* Builds the PSD a spec describes (ljgap_psd_power / ljgap_psd_table status). */
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);
 /* The PSD spec of sweep value i (rq->x[i] placed in the varied field, in core units). */
 void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec);
-
-/* Length of the longest prefix of s[0..n) made of whole, well-formed UTF-8 characters (no
- * overlong forms, surrogates or code points past U+10FFFF): n when all of it is. */
-size_t ljgap_utf8_span(const char *s, size_t n);
 
 /* Records one problem at pointer ptr (printf-style detail). */
 void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)

@@ -24,4 +24,8 @@ void ljgap_textbuf_printf(ljgap_textbuf *b, const char *fmt, ...)
 /* Appends n bytes of s. */
 void ljgap_textbuf_put(ljgap_textbuf *b, const char *s, size_t n);
 
+/* Length of the longest prefix of s[0..n) made of whole, well-formed UTF-8 characters (no
+ * overlong forms, surrogates or code points past U+10FFFF): n when all of it is. */
+size_t ljgap_utf8_span(const char *s, size_t n);
+
 #endif

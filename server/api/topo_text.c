@@ -22,7 +22,8 @@
  * give the correctly rounded double, as cJSON's strtod does for the same digits, so text and
  * JSON agree bit for bit); the matrix grows by doubling (bench/topo.sh times a 2048² map).
  */
-#include "request.h"
+#include "topo_text.h"
+#include "textbuf.h" /* ljgap_utf8_span */
 
 #include <math.h>
 #include <stdint.h>

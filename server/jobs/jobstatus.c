@@ -8,7 +8,8 @@
  * job-damaged problem that names the field.
  */
 #include "jobstatus.h"
-#include "request.h" /* ljgap_utf8_span */
+#include "request.h"
+#include "textbuf.h" /* ljgap_utf8_span */
 
 #include <cjson/cJSON.h>
 #include <math.h>

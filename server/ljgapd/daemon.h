@@ -163,12 +163,6 @@ extern const size_t ljgapd_job_nkinds;
 
 /* The row for url: first match wins; the last row (path NULL) answers 404. */
 const struct route *ljgapd_route_find(const char *url);
-/* Is method one of the comma-separated tokens in allow? */
-int ljgapd_method_allowed(const char *allow, const char *method);
-/* Is the Content-Type application/json or application/...+json (parameters allowed)? */
-int ljgapd_is_json_type(const char *ct);
-/* Is it text/plain or text/csv (parameters allowed)? */
-int ljgapd_is_text_type(const char *ct);
 
 /* ---- work off the I/O thread (work.c) ---- */
 

@@ -43,6 +43,44 @@
 
 #define DISCARD_FACTOR 16 /* close a connection sending more than this times the body limit */
 
+/* ---- the request line and headers ---- */
+
+/* Is method one of the comma-separated tokens in allow? */
+static int method_allowed(const char *allow, const char *method)
+{
+    size_t n = strlen(method);
+    for (const char *p = allow; *p;) {
+        size_t t = strcspn(p, ",");
+        if (t == n && strncmp(p, method, n) == 0) return 1;
+        p += t;
+        p += strspn(p, ", ");
+    }
+    return 0;
+}
+
+/* Is the Content-Type text/plain or text/csv (parameters allowed)? */
+static int is_text_type(const char *ct)
+{
+    size_t n;
+    if (!ct) return 0;
+    ct += strspn(ct, " \t");
+    n = strcspn(ct, "; \t");
+    return (n == 10 && strncasecmp(ct, "text/plain", 10) == 0) ||
+           (n == 8 && strncasecmp(ct, "text/csv", 8) == 0);
+}
+
+/* Is it application/json or application/...+json (parameters allowed)? */
+static int is_json_type(const char *ct)
+{
+    size_t n;
+    if (!ct) return 0;
+    ct += strspn(ct, " \t");
+    n = strcspn(ct, "; \t");
+    if (n == 16 && strncasecmp(ct, "application/json", 16) == 0) return 1;
+    return n > 17 && strncasecmp(ct, "application/", 12) == 0 &&
+           strncasecmp(ct + n - 5, "+json", 5) == 0;
+}
+
 /* Copy s into dst (size dstsz), replacing bytes outside printable ASCII with '?'. */
 static void copy_printable(char *dst, size_t dstsz, const char *s)
 {
@@ -157,7 +195,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     }
     r->route = ljgapd_route_find(r->url);
     if (!r->route->path) return r->route->answer(c, r);
-    if (!ljgapd_method_allowed(r->route->allow, method)) {
+    if (!method_allowed(r->route->allow, method)) {
         snprintf(detail, sizeof detail, "use %s", r->route->allow);
         return ljgapd_respond_problem(c, r, MHD_HTTP_METHOD_NOT_ALLOWED, detail,
                                       MHD_HTTP_HEADER_ALLOW, r->route->allow);
@@ -165,11 +203,11 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     if (!r->route->takes_body) return r->route->answer(c, r);
 
     ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-    r->text = r->route->text_max && ljgapd_is_text_type(ctype);
+    r->text = r->route->text_max && is_text_type(ctype);
     r->limit = r->text ? r->route->text_max : ljgapd_srv.cfg.max_body;
     clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (clen) want = strtoull(clen, NULL, 10);
-    if (!r->text && !ljgapd_is_json_type(ctype)) {
+    if (!r->text && !is_json_type(ctype)) {
         /* the type first: a body the route never takes is 415 whatever its size */
         const char *types =
             r->route->text_max ? "application/json, text/plain, text/csv" : "application/json";

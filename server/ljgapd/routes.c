@@ -335,36 +335,3 @@ const struct route *ljgapd_route_find(const char *url)
     }
     return rt;
 }
-
-int ljgapd_method_allowed(const char *allow, const char *method)
-{
-    size_t n = strlen(method);
-    for (const char *p = allow; *p;) {
-        size_t t = strcspn(p, ",");
-        if (t == n && strncmp(p, method, n) == 0) return 1;
-        p += t;
-        p += strspn(p, ", ");
-    }
-    return 0;
-}
-
-int ljgapd_is_text_type(const char *ct)
-{
-    size_t n;
-    if (!ct) return 0;
-    ct += strspn(ct, " \t");
-    n = strcspn(ct, "; \t");
-    return (n == 10 && strncasecmp(ct, "text/plain", 10) == 0) ||
-           (n == 8 && strncasecmp(ct, "text/csv", 8) == 0);
-}
-
-int ljgapd_is_json_type(const char *ct)
-{
-    size_t n;
-    if (!ct) return 0;
-    ct += strspn(ct, " \t");
-    n = strcspn(ct, "; \t");
-    if (n == 16 && strncasecmp(ct, "application/json", 16) == 0) return 1;
-    return n > 17 && strncasecmp(ct, "application/", 12) == 0 &&
-           strncasecmp(ct + n - 5, "+json", 5) == 0;
-}

@@ -70,6 +70,7 @@
 #include "handler.h"
 #include "memest.h"
 #include "request.h"
+#include "topo_text.h"
 #include "jobstatus.h"
 #include "jobstore.h"
 

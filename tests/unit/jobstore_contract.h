@@ -26,7 +26,7 @@
 #include "check.h"
 #include "jobstatus.h"
 #include "jobstore.h"
-#include "request.h" /* ljgap_utf8_span */
+#include "textbuf.h" /* ljgap_utf8_span */
 
 #define ID_A "00000000000000000000000000000001"
 #define ID_B "00000000000000000000000000000002"
