@@ -8,6 +8,7 @@
 #define LJGAP_BENCH_H
 
 #include "ljgap.h"
+#include "core.h" /* ljgap__now */
 
 #include <stdlib.h>
 
@@ -42,9 +43,9 @@ static inline int bench_median_ms(bench_fn run, bench_fn score, void *ctx, doubl
     double t[7];
     int n = 1, st = 0;
     for (int i = 0; i < n; i++) {
-        double t0 = ljgap_now();
+        double t0 = ljgap__now();
         st = run(ctx, i);
-        t[i] = 1e3 * (ljgap_now() - t0);
+        t[i] = 1e3 * (ljgap__now() - t0);
         if (!st && score) st = score(ctx, i);
         if (st) {
             n = i + 1;

@@ -25,6 +25,7 @@
  * against the PDE's lines, interpolated (or, flagged, extrapolated) log-log (time_at_error).
  */
 #include "bench.h"
+#include "core.h" /* ljgap__now */
 #include "ljgap.h"
 #include "paper.h"
 #include "pde.h"
@@ -183,9 +184,9 @@ static row *measure(const char *method, quantity q, double x, const char *settin
         reps = NREP_MC;
         st = LJGAP_OK;
         for (int i = 0; i < NREP_MC && !st; i++) {
-            double t0 = ljgap_now();
+            double t0 = ljgap__now();
             st = run_job(&J, i);
-            t[i] = 1e3 * (ljgap_now() - t0);
+            t[i] = 1e3 * (ljgap__now() - t0);
             if (!st) st = score_job(&J, i);
         }
         ms = bench_median(t, NREP_MC);
@@ -296,13 +297,13 @@ static void reference(void)
     o.max_seconds = 120;
     ljgap_warnings w = {0};
     ljgap_summary s;
-    double t = ljgap_now();
+    double t = ljgap__now();
     int st = ljgap_traction(psd_fig4, &o, NULL, 0, NULL, &s, &w);
     if (st) die("reference dgamma", st);
     ref_dgamma = s.dgamma_eff.value;
     ref_dgamma_err = s.dgamma_eff.err;
     printf("reference dgamma_eff (pde, tol 1e-10): %.12f ± %.1e (%.1f s)%s%s\n", ref_dgamma,
-           ref_dgamma_err, ljgap_now() - t, w.n ? "; warning: " : "", w.n ? w.msg[0] : "");
+           ref_dgamma_err, ljgap__now() - t, w.n ? "; warning: " : "", w.n ? w.msg[0] : "");
 
     /* cross-check: the traction at three gaps by Monte Carlo against the reference solver */
     double g[3] = {s.g_eq.value, s.g_at_max.value, 4.0};
@@ -326,7 +327,7 @@ static void reference(void)
 
     double k2 = PDF_K2;
     w.n = 0;
-    t = ljgap_now();
+    t = ljgap__now();
     if ((st = ljgap_pdf_compute(psd_fig2, &o, PDF_GAVE, &k2, 1, NULL, &ref_pdf, &w)))
         die("reference pdf", st);
     ref_spline = gsl_interp_alloc(gsl_interp_cspline, ref_pdf.n);
@@ -337,7 +338,7 @@ static void reference(void)
     printf("reference pdf (pde, tol 1e-10): %zu nodes on [%.3f, %.3f], L1 error estimate %.1e, "
            "sigma %.10f ± %.1e (%.1f s)%s%s\n",
            ref_pdf.n, ref_pdf.g[0], ref_pdf.g[ref_pdf.n - 1], ref_pdf.phi_err, ref_pdf.sigma.value,
-           ref_pdf.sigma.err, ljgap_now() - t, w.n ? "; warning: " : "", w.n ? w.msg[0] : "");
+           ref_pdf.sigma.err, ljgap__now() - t, w.n ? "; warning: " : "", w.n ? w.msg[0] : "");
 }
 
 /* Monte Carlo against the references, from the largest ladder setting: the mean over the

@@ -13,6 +13,7 @@
  * (n = 64), and for L = 2π, 4π, 8π at the same spacing (n = 64, 128, 256).
  */
 #include "ljgap_sim.h"
+#include "core.h" /* ljgap__now */
 
 #include <gsl/gsl_errno.h>
 #include <math.h>
@@ -43,9 +44,9 @@ static int run(const ljgap_psd *p, const ljgap_sim_opts *o, const double *g, siz
                ljgap_sim_result *res, double *secs)
 {
     ljgap_warnings w = {0};
-    double t = ljgap_now();
+    double t = ljgap__now();
     int st = ljgap_sim_run(p, o, g, n, res, &w);
-    *secs = ljgap_now() - t;
+    *secs = ljgap__now() - t;
     for (int i = 0; i < w.n; i++)
         fprintf(stderr, "sim: %s\n", w.msg[i]);
     if (st) fprintf(stderr, "sim: %s\n", ljgap_strerror(st));

@@ -24,6 +24,7 @@
  * Figures, not assertions; timings are medians (bench.h) on a shared machine.
  */
 #include "bench.h"
+#include "core.h" /* ljgap__now */
 #include "ljgap_sim.h"
 
 #include <fftw3.h>
@@ -71,9 +72,9 @@ static double timed(job *j, int repeat)
     double ms;
     int reps;
     if (!repeat) {
-        double t = ljgap_now();
+        double t = ljgap__now();
         if (job_run(j, 0)) return NAN;
-        return 1e3 * (ljgap_now() - t);
+        return 1e3 * (ljgap__now() - t);
     }
     return bench_median_ms(job_run, NULL, j, &ms, &reps) ? NAN : ms;
 }
@@ -226,19 +227,19 @@ static int fftw_flags(void)
         static const unsigned flags[2] = {FFTW_ESTIMATE, FFTW_MEASURE};
         static const char *names[2] = {"estimate", "measure"};
         for (int f = 0; f < 2; f++) {
-            double t0 = ljgap_now();
+            double t0 = ljgap__now();
             fftw_plan p = fftw_plan_dft_r2c_2d(n, n, a, c, flags[f]);
             fftw_plan q = fftw_plan_dft_c2r_2d(n, n, c, a, flags[f]);
-            double tp = ljgap_now() - t0, t[7];
+            double tp = ljgap__now() - t0, t[7];
             for (int r = 0; r < 7; r++) {
                 for (size_t i = 0; i < (size_t)n * n; i++)
                     a[i] = (double)(i % 7);
-                t0 = ljgap_now();
+                t0 = ljgap__now();
                 for (int k = 0; k < 50; k++) {
                     fftw_execute(p);
                     fftw_execute(q);
                 }
-                t[r] = (ljgap_now() - t0) / 50 * 1e3;
+                t[r] = (ljgap__now() - t0) / 50 * 1e3;
             }
             printf("%d,%s,%.3f,%.3f\n", n, names[f], tp, bench_median(t, 7));
             fftw_destroy_plan(p);

@@ -7,6 +7,7 @@
  *   build/bench/jobstore [N]      (default 400)
  */
 #include "bench.h"
+#include "core.h" /* ljgap__now */
 #include "jobstatus.h"
 #include "jobstore.h"
 
@@ -56,30 +57,30 @@ int main(int argc, char **argv)
         return 1;
     }
     for (int i = 0; i < n; i++) {
-        double t0 = ljgap_now();
+        double t0 = ljgap__now();
         ljgap_job_id_new(ids[i]);
         if (ljgap_jobstore_create(st, ids[i], "simulation", "{\"n\":64}", 8, 0) != 0) return 1;
-        t[0][i] = 1e3 * (ljgap_now() - t0);
+        t[0][i] = 1e3 * (ljgap__now() - t0);
     }
     for (int i = 0; i < n; i++) {
-        double t0 = ljgap_now();
+        double t0 = ljgap__now();
         if (ljgap_jobstore_claim(st, "bench", 30, &rec) != 0) return 1;
-        t[1][i] = 1e3 * (ljgap_now() - t0);
+        t[1][i] = 1e3 * (ljgap__now() - t0);
         runs[i] = rec.run;
         ljgap_job_record_clear(&rec);
-        t0 = ljgap_now();
+        t0 = ljgap__now();
         ljgap_jobstore_renew(st, ids[i], runs[i], 0.5, 30, &cancel);
-        t[2][i] = 1e3 * (ljgap_now() - t0);
-        t0 = ljgap_now();
+        t[2][i] = 1e3 * (ljgap__now() - t0);
+        t0 = ljgap__now();
         ljgap_jobstore_finish(st, ids[i], runs[i], LJGAP_JOB_DONE, answer, strlen(answer));
-        t[3][i] = 1e3 * (ljgap_now() - t0);
+        t[3][i] = 1e3 * (ljgap__now() - t0);
     }
     for (int i = 0; i < n; i++) {
-        double t0 = ljgap_now();
+        double t0 = ljgap__now();
         char *json;
         if (ljgap_jobstore_get(st, ids[i], &rec) != 0 || !(json = ljgap_job_status_json(&rec)))
             return 1;
-        t[4][i] = 1e3 * (ljgap_now() - t0);
+        t[4][i] = 1e3 * (ljgap__now() - t0);
         free(json);
         ljgap_job_record_clear(&rec);
     }
@@ -88,9 +89,9 @@ int main(int argc, char **argv)
         double t0;
         ljgap_job_id_new(id);
         ljgap_jobstore_create(st, id, "simulation", "{}", 2, 0);
-        t0 = ljgap_now();
+        t0 = ljgap__now();
         ljgap_jobstore_cancel(st, id, &rec);
-        t[5][i] = 1e3 * (ljgap_now() - t0);
+        t[5][i] = 1e3 * (ljgap__now() - t0);
         ljgap_job_record_clear(&rec);
     }
     printf("# job store: SQLite %s, WAL, FULL commits for create/cancel/finish, on a temporary "

@@ -11,6 +11,7 @@
  * Fig. 4 case: D = 2.5, k1 = 1, k2 = ∞, C = 1/(4π) (theory.md §4).
  */
 #include "bench.h"
+#include "core.h" /* ljgap__now */
 #include "ljgap.h"
 
 #include <gsl/gsl_errno.h>
@@ -49,9 +50,9 @@ static void case_init(speed_case *c, size_t n)
 static double run(speed_case *c)
 {
     ljgap_warnings w = {0};
-    double t = ljgap_now();
+    double t = ljgap__now();
     int st = ljgap_traction(&c->psd, &c->o, c->g, c->n, c->s, c->want_sum ? &c->sum : NULL, &w);
-    t = ljgap_now() - t;
+    t = ljgap__now() - t;
     if (st) {
         fprintf(stderr, "speed: %s\n", ljgap_strerror(st));
         exit(1);

@@ -22,6 +22,7 @@
  * extrapolation does not remove would show.
  */
 #include "bench.h"
+#include "core.h" /* ljgap__now */
 #include "ljgap.h"
 
 #include <gsl/gsl_errno.h>
@@ -171,9 +172,9 @@ int main(int argc, char **argv)
         int reps;
         st = bench_median_ms(run_case, NULL, &A, &ms, &reps);
         if (st == LJGAP_OK) { /* the finer run once */
-            double t0 = ljgap_now();
+            double t0 = ljgap__now();
             st = run_case(&B, 0);
-            ms_fine = 1e3 * (ljgap_now() - t0);
+            ms_fine = 1e3 * (ljgap__now() - t0);
         }
         int nq = isnan(K->g) ? NQ : 1;
         char wt[2 * LJGAP_MAX_WARN * LJGAP_WARN_LEN];

@@ -57,9 +57,9 @@ static int model(const ljgap_psd *p, const ljgap_sim_opts *o, const double *g, s
 {
     ljgap_sim_result r;
     ljgap_warnings w = {0};
-    double t = ljgap_now();
+    double t = ljgap__now();
     int st = ljgap_sim_run(p, o, g, n, &r, &w);
-    *secs = ljgap_now() - t;
+    *secs = ljgap__now() - t;
     for (int i = 0; i < w.n; i++)
         if (!strstr(w.msg[i], "lattice of wavevectors")) fprintf(stderr, "sim: %s\n", w.msg[i]);
     if (st) {
@@ -194,12 +194,12 @@ int main(int argc, char **argv)
     ljgap_opts to;
     ljgap_opts_default(&to);
     ljgap_warnings w = {0};
-    double t = ljgap_now();
+    double t = ljgap__now();
     if (ljgap_traction(&p, &to, NULL, 0, NULL, &s, &w)) {
         fprintf(stderr, "theory failed\n");
         return 1;
     }
-    row(label, D, m0, "theory", 0, NULL, 0, ljgap_now() - t, &s, 0, 0);
+    row(label, D, m0, "theory", 0, NULL, 0, ljgap__now() - t, &s, 0, 0);
     if (full) {
         if (model(&p, &o, g, ng, &s, &secs, &jumps)) return 1;
         row(label, D, m0, "discrete", 0, &o, L, secs, &s, ng, jumps);

@@ -33,8 +33,9 @@ int ljgap__pdf_mc(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const
                   size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
 
 /* ---- util.c ---- */
+double ljgap__now(void); /* monotonic seconds */
 /* Nonzero when the computation must stop: cancelled, or past deadline (seconds, from
- * ljgap_now). */
+ * ljgap__now). */
 int ljgap__should_stop(const ljgap_opts *o, double deadline);
 
 #endif

@@ -173,7 +173,7 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
                        size_t n, ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     if (!(c > 0) || o->samples < 2 * MC_NB || (n && !sigma)) return LJGAP_EINVAL;
-    const double t0 = ljgap_now(), deadline = t0 + o->max_seconds;
+    const double t0 = ljgap__now(), deadline = t0 + o->max_seconds;
     const size_t nc = sum ? MC_NCURVE : 0, np = n + nc;
     if (np == 0) return LJGAP_OK;
     double *g = malloc(np * sizeof *g), *s1 = calloc(np, sizeof *s1), *s2 = calloc(np, sizeof *s2);
@@ -191,20 +191,20 @@ int ljgap__mc_traction(const ljgap_psd *psd, const ljgap_opts *o, double c, cons
     /* pilot: cost per path and point, round-robin over the points so that a pilot cut short
      * (it may use at most MC_PILOT_SHARE of the time budget) still sees every point */
     long B = (o->samples + MC_NB - 1) / MC_NB, Bp = B / 16 > 8 ? B / 16 : 8, done = 0;
-    double tp = ljgap_now(), Gend;
+    double tp = ljgap__now(), Gend;
     gsl_rng_set(master, mix64(o->seed ^ 0x5bd1e995ULL));
     for (long i = 0; i < Bp; i++) {
         if (cancelled_now(o, i)) {
             st = LJGAP_ECANCEL;
             goto end;
         }
-        if (i > 0 && ljgap_now() - tp > MC_PILOT_SHARE * o->max_seconds) break;
+        if (i > 0 && ljgap__now() - tp > MC_PILOT_SHARE * o->max_seconds) break;
         for (size_t p = 0; p < np; p++, done++)
             mc_path(&m, gsl_rng_get(master), g[p], &kfull, 1, &Gend);
     }
-    double per_path = (ljgap_now() - tp) / (double)done;
+    double per_path = (ljgap__now() - tp) / (double)done;
     double steps_pp = (double)m.steps / (double)done;
-    double left = deadline - ljgap_now();
+    double left = deadline - ljgap__now();
     double Bw = (double)o->max_work / (MC_NB * (double)np * fmax(steps_pp, 1.0));
     double Bt = 0.9 * left / (MC_NB * (double)np * fmax(per_path, 1e-9));
     double Bmax = fmin(Bw, Bt);
@@ -328,7 +328,7 @@ end:
  * The answer is r(c) - b, and |b| is added to the standard error, so the estimate covers
  * the discretisation as well as the sampling. The two runs share their path seeds. */
 int ljgap__traction_mc(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                      ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
+                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     ljgap_opts o1 = *o, o2 = *o;
     o1.max_seconds = 0.75 * o->max_seconds;
@@ -375,7 +375,7 @@ int ljgap__mc_pdf(const ljgap_psd *psd, const ljgap_opts *o, double c, double g_
 {
     if (!(c > 0) || o->samples < 2) return LJGAP_EINVAL;
     if (nk2 == 0) return LJGAP_OK;
-    const double deadline = ljgap_now() + o->max_seconds;
+    const double deadline = ljgap__now() + o->max_seconds;
     const long N0 = o->samples;
     double *ks = malloc(nk2 * sizeof *ks), *G = malloc((size_t)N0 * nk2 * sizeof *G);
     mc_state m = {psd, c, ljgap_k0(), gsl_rng_alloc(gsl_rng_taus2), 0, 0, 0, 0};
@@ -480,7 +480,7 @@ static double hist_at(const ljgap_pdf *b, double g)
  * the L1 distance of the two histograms / 3 (on the same grid when one is asked for; without
  * one the two runs bin on slightly different ranges, which only adds to the estimate). */
 int ljgap__pdf_mc(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                 size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
+                  size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
     ljgap_opts o1 = *o, o2 = *o;
     o1.max_seconds = 0.75 * o->max_seconds;

@@ -398,8 +398,8 @@ int ljgap__paper_summary_at(const ljgap_psd *psd, const ljgap_opts *o, double vm
     trac_setup_make(&ts, psd, NULL, 0, 1);
     double v[NSUM], impact = 0.0;
     long work = 0;
-    int st = trac_level(psd, o, ljgap_now() + o->max_seconds, vmax, &ts, NULL, 0, v, &impact, &work,
-                        NULL);
+    int st = trac_level(psd, o, ljgap__now() + o->max_seconds, vmax, &ts, NULL, 0, v, &impact,
+                        &work, NULL);
     if (st) return st;
     memset(sum, 0, sizeof *sum);
     sum->g_eq.value = v[0];
@@ -491,10 +491,10 @@ static void fixed_warn(const ljgap_opts *o, ljgap_warnings *w)
 }
 
 int ljgap__traction_paper(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                         ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
+                          ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
     if (!(o->vmax > 0) || !isfinite(o->vmax) || (n && !sigma)) return LJGAP_EINVAL;
-    const double deadline = ljgap_now() + o->max_seconds;
+    const double deadline = ljgap__now() + o->max_seconds;
     trac_setup ts;
     if (!sum && n == 0) return LJGAP_OK;
     trac_setup_make(&ts, psd, g_ave, n, sum != NULL);
@@ -704,7 +704,7 @@ int ljgap__paper_pdf_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax, 
     pdf_level A = {0};
     memset(out, 0, sizeof *out);
     pdf_ends(psd, g_ave, &g_lo, &g_hi);
-    int st = pdf_run(psd, o, ljgap_now() + o->max_seconds, vmax, g_lo, g_hi, g_ave, &ks, 1, &A,
+    int st = pdf_run(psd, o, ljgap__now() + o->max_seconds, vmax, g_lo, g_hi, g_ave, &ks, 1, &A,
                      &leak, &work);
     if (st) return st;
     out->k2 = k2;
@@ -716,11 +716,11 @@ int ljgap__paper_pdf_at(const ljgap_psd *psd, const ljgap_opts *o, double vmax, 
 }
 
 int ljgap__pdf_paper(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                    size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
+                     size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
     if (!(o->vmax > 0) || !isfinite(o->vmax)) return LJGAP_EINVAL;
     if (nk2 == 0) return LJGAP_OK;
-    const double deadline = ljgap_now() + o->max_seconds, tol = o->tol;
+    const double deadline = ljgap__now() + o->max_seconds, tol = o->tol;
     double *ks = malloc(nk2 * sizeof *ks), *serr = calloc(2 * nk2, sizeof *serr);
     double *perr = calloc(2 * nk2, sizeof *perr), *sig = calloc(nk2, sizeof *sig);
     double *sprev = serr ? serr + nk2 : NULL, *pprev = perr ? perr + nk2 : NULL;

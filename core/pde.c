@@ -238,7 +238,7 @@ typedef struct {
 /* Which cap stopped a computation, for the warnings. */
 static const char *cap_reason(const pde_ctx *C)
 {
-    return ljgap_now() > C->deadline ? "time cap (max_seconds)" : "work cap (max_work)";
+    return ljgap__now() > C->deadline ? "time cap (max_seconds)" : "work cap (max_work)";
 }
 
 /* Backward solve: u on the grid of level L between ln g_lo and ln g_hi (fold.c steps); the
@@ -372,9 +372,9 @@ static double curve_diff(const curve_result *a, const curve_result *b, int with_
 }
 
 int ljgap__traction_pde(const ljgap_psd *psd, const ljgap_opts *o, const double *g_ave, size_t n,
-                       ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
+                        ljgap_est *sigma, ljgap_summary *sum, ljgap_warnings *w)
 {
-    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap__now() + o->max_seconds};
     double gmin = 1.0, gmax = 1.0;
     for (size_t j = 0; j < n; j++)
         gmin = fmin(gmin, g_ave[j]), gmax = fmax(gmax, g_ave[j]);
@@ -607,9 +607,9 @@ static double snap_sigma(const pde_grid *G, const double *p)
 }
 
 int ljgap__pdf_pde(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, const double *k2,
-                  size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
+                   size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w)
 {
-    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap_now() + o->max_seconds};
+    pde_ctx C = {.psd = psd, .o = o, .deadline = ljgap__now() + o->max_seconds};
     /* march through the cuts in increasing order; out[] keeps the request's order */
     size_t *ord = malloc((nk2 ? nk2 : 1) * sizeof *ord);
     double *cuts = malloc((nk2 ? nk2 : 1) * sizeof *cuts);
@@ -820,7 +820,7 @@ int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, i
 {
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap__now() + o.max_seconds};
     curve_result R;
     int st = curve_at(&C, g_lo, g_lo, g_hi, level, NULL, 0, &R, NULL);
     ljgap__nodes_free(&C.nodes);
@@ -838,7 +838,7 @@ int ljgap_pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double
         return LJGAP_EINVAL;
     ljgap_opts o;
     ljgap_opts_default(&o);
-    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap_now() + o.max_seconds};
+    pde_ctx C = {.psd = psd, .o = &o, .deadline = ljgap__now() + o.max_seconds};
     double cut = fmin(k2, psd->k2);
     pdf_level P = {0};
     memset(out, 0, sizeof *out);

@@ -61,7 +61,7 @@ void ljgap_opts_default(ljgap_opts *o)
     o->cancel = NULL;
 }
 
-double ljgap_now(void)
+double ljgap__now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -71,7 +71,7 @@ double ljgap_now(void)
 int ljgap__should_stop(const ljgap_opts *o, double deadline)
 {
     if (o && o->cancel && *o->cancel) return 1;
-    return ljgap_now() > deadline;
+    return ljgap__now() > deadline;
 }
 
 /* The methods (pde.c, paper.c, mc.c) free their partial results with it, and the caller of

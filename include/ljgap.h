@@ -178,9 +178,6 @@ int ljgap_pdf_compute(const ljgap_psd *psd, const ljgap_opts *o, double g_ave, c
                       size_t nk2, const double *grid, ljgap_pdf *out, ljgap_warnings *w);
 void ljgap_pdf_release(ljgap_pdf *p, size_t n);
 
-/* ---- util.c ---- */
-double ljgap_now(void); /* monotonic seconds */
-
 #ifdef __cplusplus
 }
 #endif

@@ -29,6 +29,7 @@
  * which thread ran which realization, so the result does not depend on the number of threads.
  */
 #include "ljgap_sim.h"
+#include "core.h" /* ljgap__now */
 #include "simlaw.h"
 #include "simsolve.h"
 
@@ -396,7 +397,7 @@ static int make_law(const ljgap_psd *psd, const ljgap_sim_opts *o, double deadli
     ljgap_opts po;
     ljgap_opts_default(&po);
     po.tol = o->law_tol;
-    po.max_seconds = deadline - ljgap_now();
+    po.max_seconds = deadline - ljgap__now();
     po.cancel = o->cancel;
     int st = po.max_seconds > 0 ? sim_law_fine(law, fine, &po, w) : LJGAP_ECAP;
     if (!st) {
@@ -410,7 +411,7 @@ static int make_law(const ljgap_psd *psd, const ljgap_sim_opts *o, double deadli
 int ljgap_sim_run(const ljgap_psd *psd, const ljgap_sim_opts *o, const double *g_ave, size_t n_gap,
                   ljgap_sim_result *res, ljgap_warnings *w)
 {
-    double t0 = ljgap_now(), L = 0.0;
+    double t0 = ljgap__now(), L = 0.0;
     if (!res) {
         ljgap_warn(w, "simulation: no result to write");
         return LJGAP_EINVAL;

@@ -47,6 +47,7 @@
  * array interface (thread-safe; every array comes from fftw_alloc, so alignments match).
  */
 #include "simsolve.h"
+#include "core.h" /* ljgap__now */
 
 #include <gsl/gsl_rng.h>
 #include <math.h>
@@ -190,7 +191,7 @@ static int ws_stop(const sim_ws *w)
     int a = atomic_load_explicit(sh->abort, memory_order_relaxed);
     if (a) return a;
     if (sh->o->cancel && *sh->o->cancel) return LJGAP_ECANCEL;
-    if (ljgap_now() > sh->deadline) return LJGAP_ECAP;
+    if (ljgap__now() > sh->deadline) return LJGAP_ECAP;
     return LJGAP_OK;
 }
 

@@ -13,6 +13,7 @@
 #define LJGAP_SIMSOLVE_H
 
 #include "ljgap_sim.h"
+#include "core.h" /* ljgap__now */
 #include "simlaw.h"
 
 #include <fftw3.h>
@@ -27,7 +28,7 @@ typedef struct {
     fftw_plan fwd, bwd;      /* n x n r2c and c2r, executed on each workspace's arrays */
     const sim_law *law;      /* the interface law */
     const ljgap_sim_opts *o; /* tol, max_iter, cancel */
-    double deadline;         /* ljgap_now() value of the time cap */
+    double deadline;         /* ljgap__now() value of the time cap */
     atomic_int *abort;       /* nonzero: stop with that status (another realization failed) */
 } sim_shared;
 

@@ -35,7 +35,7 @@
 typedef struct {
     ljgap_request rq;           /* what was asked; rq.warn collects every warning */
     cJSON *ans;                 /* the answer object */
-    double deadline;            /* ljgap_now() value when the time cap runs out */
+    double deadline;            /* ljgap_clock_now() value when the time cap runs out */
     const volatile int *cancel; /* the call's cancel flag (or the limits' one) */
     int oom;                    /* an allocation failed while building ans */
     char fail[LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400]; /* extra detail for a failed status, ""

@@ -28,3 +28,10 @@ int ljgap_cond_init_monotonic(pthread_cond_t *c)
     pthread_condattr_destroy(&ca);
     return e;
 }
+
+double ljgap_clock_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}

@@ -11,6 +11,9 @@
 #include <pthread.h>
 #include <time.h>
 
+/* Seconds on CLOCK_MONOTONIC: timings and deadlines of the server (the core keeps its own). */
+double ljgap_clock_now(void);
+
 /* The absolute CLOCK_MONOTONIC time s seconds from now (s <= 0 or NaN: now; at most 1e6 s). */
 struct timespec ljgap_deadline_in(double s);
 

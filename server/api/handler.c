@@ -42,6 +42,7 @@
  * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
  */
 #include "handler.h"
+#include "clock.h" /* ljgap_clock_now */
 #include "accept.h"
 #include "answer.h"
 #include "csv.h"
@@ -266,7 +267,7 @@ void ljgap_ans_meta(job *j, double t0)
     cJSON *meta = put(j, j->ans, "meta", cJSON_CreateObject());
     cJSON *w;
     put(j, meta, "method", cJSON_CreateString(j->rq.method));
-    put(j, meta, "elapsed_ms", cJSON_CreateNumber((ljgap_now() - t0) * 1e3));
+    put(j, meta, "elapsed_ms", cJSON_CreateNumber((ljgap_clock_now() - t0) * 1e3));
     put(j, meta, "version", cJSON_CreateString(LJGAP_VERSION));
     w = put(j, meta, "warnings", cJSON_CreateArray());
     for (int i = 0; w && i < j->rq.warn.n; i++)
@@ -278,7 +279,7 @@ void ljgap_ans_meta(job *j, double t0)
 static int opts_now(job *j, ljgap_opts *o)
 {
     *o = j->rq.opts;
-    o->max_seconds = j->deadline - ljgap_now();
+    o->max_seconds = j->deadline - ljgap_clock_now();
     o->cancel = j->cancel;
     if (o->max_seconds > 0) return LJGAP_OK;
     snprintf(j->fail, sizeof j->fail, " (the request's time budget ran out before this step)");
@@ -797,7 +798,7 @@ void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_repl
 void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out)
 {
-    double t0 = ljgap_now();
+    double t0 = ljgap_clock_now();
     const endpoint_row *r = endpoint_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
@@ -830,7 +831,7 @@ int ljgap_handler_has_text(const char *endpoint)
 void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
                        const char *body, size_t len, const ljgap_call *call, ljgap_reply *out)
 {
-    double t0 = ljgap_now();
+    double t0 = ljgap_clock_now();
     ljgap_topo_spec heights = {0};
     ljgap_verr ve = {0};
     cJSON *query = NULL;

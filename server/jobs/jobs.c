@@ -45,7 +45,7 @@ typedef struct slot {
     int lost;                      /* the store gave the job to someone else */
     double progress;               /* latest fraction reported, 0..1 */
     double written;                /* progress last written to the store */
-    double renewed;                /* ljgap_now() at the last renewal (0: due) */
+    double renewed;                /* ljgap_clock_now() at the last renewal (0: due) */
 } slot;
 
 struct ljgap_jobs {
@@ -60,7 +60,7 @@ struct ljgap_jobs {
     unsigned long submitted; /* jobs submitted here so far (a worker's claim saw up to...) */
     int stopping;            /* ljgap_jobs_shutdown was called */
     int keeper_quit;         /* the keeper must return */
-    double logged;           /* ljgap_now() of the last store error logged */
+    double logged;           /* ljgap_clock_now() of the last store error logged */
     slot *slots;             /* one per worker */
     pthread_t *threads;      /* the workers */
     unsigned n_threads;      /* workers started */
@@ -83,7 +83,7 @@ void ljgap_jobs_config_default(ljgap_jobs_config *c)
 /* Logs a store failure (what + the store's reason), at most once per LOG_SECONDS. */
 static void log_store(ljgap_jobs *js, const char *what, const char *id)
 {
-    double now = ljgap_now();
+    double now = ljgap_clock_now();
     int say;
     pthread_mutex_lock(&js->lock);
     say = js->logged == 0 || now - js->logged >= LOG_SECONDS;
@@ -135,12 +135,12 @@ static void on_progress(void *ctx, double fraction)
 static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state state,
                    const char *answer)
 {
-    double until = ljgap_now() + js->cfg.lease_seconds;
+    double until = ljgap_clock_now() + js->cfg.lease_seconds;
     int st, failed = 0, stopping = 0;
     for (;;) {
         st = ljgap_jobstore_finish(js->store, rec->id, rec->run, state, answer,
                                    answer ? strlen(answer) : 0);
-        if (st != LJGAP_JOBSTORE_ERROR || stopping || ljgap_now() >= until) break;
+        if (st != LJGAP_JOBSTORE_ERROR || stopping || ljgap_clock_now() >= until) break;
         if (!failed) log_store(js, "cannot write the end of job (trying again)", rec->id);
         failed = 1;
         pthread_mutex_lock(&js->lock);
@@ -319,13 +319,13 @@ static void *keeper(void *arg)
 {
     ljgap_jobs *js = arg;
     double tick = fmin(js->cfg.progress_seconds, js->cfg.lease_seconds / 3) / 2;
-    double next_evict = ljgap_now() + EVICT_SECONDS;
+    double next_evict = ljgap_clock_now() + EVICT_SECONDS;
     pthread_mutex_lock(&js->lock);
     while (!js->keeper_quit) {
         struct timespec until = ljgap_deadline_in(tick);
         double now;
         pthread_cond_timedwait(&js->finished, &js->lock, &until);
-        now = ljgap_now();
+        now = ljgap_clock_now();
         for (unsigned w = 0; w < js->n_threads && !js->keeper_quit; w++)
             keep_slot(js, &js->slots[w], now);
         if (now >= next_evict && !js->keeper_quit) {
@@ -447,7 +447,7 @@ int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json)
 
 int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final)
 {
-    double until = ljgap_now() + (wait_s > 0 ? fmin(wait_s, 1e6) : 0);
+    double until = ljgap_clock_now() + (wait_s > 0 ? fmin(wait_s, 1e6) : 0);
     ljgap_job_record rec;
     int st;
     *json = NULL;
@@ -461,9 +461,9 @@ int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json
         }
         pthread_mutex_unlock(&js->lock);
     }
-    while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap_now() < until) {
+    while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap_clock_now() < until) {
         /* woken when a job here returns; a job running elsewhere is looked at every 0.1 s */
-        struct timespec t = ljgap_deadline_in(fmin(until - ljgap_now(), 0.1));
+        struct timespec t = ljgap_deadline_in(fmin(until - ljgap_clock_now(), 0.1));
         pthread_mutex_lock(&js->lock);
         pthread_cond_timedwait(&js->finished, &js->lock, &t);
         pthread_mutex_unlock(&js->lock);

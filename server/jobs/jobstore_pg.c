@@ -42,7 +42,7 @@
 #include "clock.h"
 #include "jobstore.h"
 #include "jobstore_pg_conn.h"
-#include "ljgap.h" /* ljgap_now: monotonic seconds */
+#include "ljgap.h"
 
 #include <libpq-fe.h>
 
@@ -442,7 +442,7 @@ static PGresult *open_exec(pg_store *s, PGconn *c, const char *sql, ExecStatusTy
 /* The schema: ours, at its latest version (migrating under the lock), or an error in err. */
 static int check_schema(pg_store *s, PGconn *c, char *err, size_t errlen)
 {
-    double deadline = ljgap_now() + 4 * OP_S;
+    double deadline = ljgap_clock_now() + 4 * OP_S;
     PGresult *res = NULL;
     long version = 0, tables = 0;
     int has_schema, has_version, ok = -1;
@@ -509,7 +509,7 @@ end:
     PQclear(res);
     if (ok != 0 && PQstatus(c) == CONNECTION_OK) { /* leave the connection clean (or drop it) */
         exec_fail fail;
-        PQclear(pgs_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, ljgap_now() + OP_S, &fail));
+        PQclear(pgs_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, ljgap_clock_now() + OP_S, &fail));
     }
     return ok;
 }
@@ -585,7 +585,7 @@ int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore *
     s->keys[k] = "client_encoding", s->vals[k++] = "UTF8"; /* after the URL: always */
     s->keys[k] = NULL, s->vals[k] = NULL;
 
-    if (!(c = pgs_connect(s, ljgap_now() + OP_S, why, sizeof why))) {
+    if (!(c = pgs_connect(s, ljgap_clock_now() + OP_S, why, sizeof why))) {
         char clean[MSG_MAX];
         pgs_clean_msg(s, why, clean, sizeof clean);
         snprintf(err, errlen, "cannot connect to the job database %s: %s", s->safe, clean);

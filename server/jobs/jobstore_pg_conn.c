@@ -6,7 +6,7 @@
 #include "clock.h"
 #include "jobstore.h"
 #include "jobstore_pg_conn.h"
-#include "ljgap.h" /* ljgap_now: monotonic seconds */
+#include "ljgap.h"
 
 #include <errno.h>
 #include <math.h>
@@ -131,14 +131,14 @@ static void quiet(void *arg, const char *message)
     (void)arg, (void)message; /* notices (and a FATAL before a close) are no log lines of ours */
 }
 
-/* Waits until fd is ready for events or deadline (ljgap_now) passes: 1 ready, 0 timed out, -1 a
- * bad descriptor. */
+/* Waits until fd is ready for events or deadline (ljgap_clock_now) passes: 1 ready, 0 timed out, -1
+ * a bad descriptor. */
 static int wait_socket(int fd, short events, double deadline)
 {
     struct pollfd p = {fd, events, 0};
     if (fd < 0) return -1;
     for (;;) {
-        double left = deadline - ljgap_now();
+        double left = deadline - ljgap_clock_now();
         int rc;
         if (left <= 0) return 0;
         rc = poll(&p, 1, (int)ceil(left * 1e3));
@@ -259,7 +259,7 @@ fail:
 static void mark_down(pg_store *s, const char *why)
 {
     s->down = 1;
-    s->retry_at = ljgap_now() + RETRY_S;
+    s->retry_at = ljgap_clock_now() + RETRY_S;
     pgs_clean_msg(s, why, s->reason, sizeof s->reason);
     pthread_cond_broadcast(&s->freed);
 }
@@ -295,7 +295,7 @@ static int take(pg_store *s, double deadline, PGconn **out)
             pthread_mutex_lock(&s->lock);
             continue;
         }
-        if (s->down && (s->probing || ljgap_now() < s->retry_at)) {
+        if (s->down && (s->probing || ljgap_clock_now() < s->retry_at)) {
             snprintf(why, sizeof why, "%s", s->reason);
             pthread_mutex_unlock(&s->lock);
             ljgap_jobstore_set_errmsg("%s: the database is unreachable (%s); trying again every "
@@ -326,7 +326,7 @@ static int take(pg_store *s, double deadline, PGconn **out)
         }
         { /* every connection is in use: wait for one, or for the store to go down */
             struct timespec t;
-            double left = deadline - ljgap_now();
+            double left = deadline - ljgap_clock_now();
             if (left <= 0) {
                 pthread_mutex_unlock(&s->lock);
                 ljgap_jobstore_set_errmsg("%s: all %u connections stayed busy for %.0f s", s->safe,
@@ -367,7 +367,7 @@ void pgs_give(pg_store *s, PGconn *c, exec_fail fail)
 PGresult *pgs_run(pg_store *s, const char *what, const char *sql, int n, const char *const *vals,
                   const char *request, size_t request_len, ExecStatusType want, int retry, int *st)
 {
-    double deadline = ljgap_now() + OP_S;
+    double deadline = ljgap_clock_now() + OP_S;
     const char *v[8];
     int lens[8] = {0}, fmts[8] = {0};
     PGresult *res;
@@ -393,7 +393,7 @@ PGresult *pgs_run(pg_store *s, const char *what, const char *sql, int n, const c
             else
                 snprintf(why, sizeof why, "%s", PQerrorMessage(c));
             pgs_give(s, c, fail);
-            if (fail == X_BROKEN && retry-- > 0 && ljgap_now() < deadline) continue;
+            if (fail == X_BROKEN && retry-- > 0 && ljgap_clock_now() < deadline) continue;
             set_error(s, what, why);
             *st = LJGAP_JOBSTORE_ERROR;
             return NULL;

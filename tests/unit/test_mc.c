@@ -13,6 +13,7 @@
 #include <stdlib.h>
 
 #include "../../core/mc.h"
+#include "core.h" /* ljgap__now */
 #include "ljgap.h"
 
 #include "check.h"
@@ -146,11 +147,11 @@ static void compare(const ljgap_psd *psd, const double *g, size_t n, long sample
     op.max_seconds = 30;
     ljgap_est a[4], b[4];
     ljgap_warnings w = {0}, wp = {0};
-    double t0 = ljgap_now();
+    double t0 = ljgap__now();
     assert_int_equal(ljgap_traction(psd, &o, g, n, a, NULL, &w), LJGAP_OK);
-    double t1 = ljgap_now();
+    double t1 = ljgap__now();
     assert_int_equal(ljgap_traction(psd, &op, g, n, b, NULL, &wp), LJGAP_OK);
-    double t2 = ljgap_now();
+    double t2 = ljgap__now();
     print_warnings(&w);
     print_warnings(&wp);
     for (size_t i = 0; i < n; i++) {
@@ -188,13 +189,13 @@ static void test_summary_and_caps(void **state)
     ljgap_opts o = mc_opts(2048);
     ljgap_summary s;
     ljgap_warnings w = {0};
-    double t0 = ljgap_now();
+    double t0 = ljgap__now();
     assert_int_equal(ljgap_traction(&psd, &o, NULL, 0, NULL, &s, &w), LJGAP_OK);
     print_warnings(&w);
     printf("  g_eq %.4f +- %.2g  sigma_max %.5f +- %.2g at %.3f +- %.2g  dgamma %.5f +- %.2g "
            "(%.1f s)\n",
            s.g_eq.value, s.g_eq.err, s.sigma_max.value, s.sigma_max.err, s.g_at_max.value,
-           s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap_now() - t0);
+           s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap__now() - t0);
     /* theory.md §4 (Fig. 4, C = 1/(4π)) */
     assert_close(s.g_eq.value, 2.6028, 4 * s.g_eq.err);
     assert_close(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err);

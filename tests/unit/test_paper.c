@@ -147,7 +147,7 @@ static void test_fig4_reference(void **state)
     ljgap_warnings w = {0};
     const double g[2] = {1.5, 3.059};
     ljgap_est sg[2];
-    double t0 = ljgap_now();
+    double t0 = ljgap__now();
     int st = ljgap_traction(&psd, &o, g, 2, sg, &s, &w);
     for (int i = 0; i < w.n; i++)
         printf("  warning: %s\n", w.msg[i]);
@@ -155,7 +155,7 @@ static void test_fig4_reference(void **state)
     printf("  g_eq %.5f +- %.2g  sigma_max %.5f +- %.2g at %.4f +- %.2g  dgamma %.5f +- %.2g "
            "(%.1f s)\n",
            s.g_eq.value, s.g_eq.err, s.sigma_max.value, s.sigma_max.err, s.g_at_max.value,
-           s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap_now() - t0);
+           s.g_at_max.err, s.dgamma_eff.value, s.dgamma_eff.err, ljgap__now() - t0);
     assert_close(s.g_eq.value, 2.6028, 4 * s.g_eq.err + 1e-4);
     assert_close(s.sigma_max.value, 0.10126, 4 * s.sigma_max.err + 1e-5);
     assert_close(s.dgamma_eff.value, 0.20147, 4 * s.dgamma_eff.err + 1e-5);

@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "ljgap.h"
+#include "core.h" /* ljgap__now */
 #include "pde.h"
 
 #include <gsl/gsl_errno.h>
@@ -440,9 +441,9 @@ static void test_stiff_and_extreme_inputs(void **state)
         ljgap_warnings w = {0};
         double g[2] = {0.5, 40};
         ljgap_est sg[2];
-        double t = ljgap_now();
+        double t = ljgap__now();
         int st = ljgap_traction(&p, &o, g, 2, sg, &s, &w);
-        t = ljgap_now() - t;
+        t = ljgap__now() - t;
         print_message("D=%g k1=%g k2=%g m0=%g: st=%d g_eq=%.6g±%.2g dgamma=%.6g±%.2g (%.0f ms, %d "
                       "warnings)\n",
                       cases[i].D, cases[i].k1, cases[i].k2, cases[i].m0, st, s.g_eq.value,
