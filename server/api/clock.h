@@ -13,6 +13,8 @@
 
 /* Seconds on CLOCK_MONOTONIC: timings and deadlines of the server (the core keeps its own). */
 double ljgap_clock_now(void);
+/* Seconds since t0 (a CLOCK_MONOTONIC reading). */
+double ljgap_clock_since(const struct timespec *t0);
 
 /* The absolute CLOCK_MONOTONIC time s seconds from now (s <= 0 or NaN: now; at most 1e6 s). */
 struct timespec ljgap_deadline_in(double s);

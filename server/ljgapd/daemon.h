@@ -22,6 +22,7 @@
 #define LJGAPD_DAEMON_H
 
 #include "budget.h"
+#include "clock.h" /* ljgap_clock_since */
 #include "conns.h"
 #include "handler.h"
 #include "http_cache.h"
@@ -238,8 +239,5 @@ enum MHD_Result ljgapd_respond_no_memory(struct MHD_Connection *c, request *r, c
 /* Bytes of the budget one computation or simulation may reserve at most: what is left beside
  * the pinned cache and a full share of bodies (its own body is in that share). */
 size_t ljgapd_compute_memory_max(void);
-
-/* Seconds since t0 (CLOCK_MONOTONIC). */
-double ljgapd_seconds_since(const struct timespec *t0);
 
 #endif

@@ -333,7 +333,7 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     if (!r) return;
     /* behind a proxy the remote address is the proxy's: name the client it forwarded */
     fprintf(stderr, "%s %s %d %.1fms id=%s%s%s%s%s\n", r->method, r->path, r->status,
-            1e3 * ljgapd_seconds_since(&r->t0), r->id, ljgapd_srv.cfg.trust_proxy ? " client=" : "",
+            1e3 * ljgap_clock_since(&r->t0), r->id, ljgapd_srv.cfg.trust_proxy ? " client=" : "",
             ljgapd_srv.cfg.trust_proxy ? r->client : "", r->note,
             toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "" : " (connection closed early)");
     conns_idle(ljgapd_srv.conns, r->rec);
@@ -375,7 +375,7 @@ void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap)
     while (n > 0 && (msg[n - 1] == '\n' || msg[n - 1] == '\r'))
         msg[--n] = '\0';
     pthread_mutex_lock(&lock);
-    if (strcmp(msg, last) == 0 && ljgapd_seconds_since(&t_last) < 1.0) {
+    if (strcmp(msg, last) == 0 && ljgap_clock_since(&t_last) < 1.0) {
         repeats++;
     } else {
         if (repeats) fprintf(stderr, "ljgapd: libmicrohttpd: (%lu more like: %s)\n", repeats, last);

@@ -192,7 +192,7 @@ static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
 static void wait_inflight(const struct timespec *t0, double until)
 {
     const struct timespec tick = {0, 20 * 1000 * 1000};
-    while (atomic_load(&ljgapd_srv.inflight) > 0 && ljgapd_seconds_since(t0) < until)
+    while (atomic_load(&ljgapd_srv.inflight) > 0 && ljgap_clock_since(t0) < until)
         nanosleep(&tick, NULL);
 }
 
@@ -288,7 +288,7 @@ int main(int argc, char **argv)
     /* Waiting requests get 503 now; computations may finish for grace_s, then are cancelled.
      * Every suspended connection must be resumed before MHD_stop_daemon. */
     if (!pool_stop(ljgapd_srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
-        !pool_stop(ljgapd_srv.ops, 0, cfg->stop_s - ljgapd_seconds_since(&t_sig))) {
+        !pool_stop(ljgapd_srv.ops, 0, cfg->stop_s - ljgap_clock_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a computation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
@@ -296,13 +296,13 @@ int main(int argc, char **argv)
     if (atomic_load(&ljgapd_srv.inflight) > 0)
         fprintf(stderr, "ljgapd: %u requests did not finish; closing their connections\n",
                 atomic_load(&ljgapd_srv.inflight));
-    if (!ljgap_jobs_wait_idle(ljgapd_srv.jobs, cfg->stop_s - ljgapd_seconds_since(&t_sig))) {
+    if (!ljgap_jobs_wait_idle(ljgapd_srv.jobs, cfg->stop_s - ljgap_clock_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a simulation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
     MHD_stop_daemon(d);
     if (lfd != MHD_INVALID_SOCKET) close(lfd);
-    fprintf(stderr, "ljgapd: stopped after %.1f s\n", ljgapd_seconds_since(&t_sig));
+    fprintf(stderr, "ljgapd: stopped after %.1f s\n", ljgap_clock_since(&t_sig));
     rc = 0;
 end:
     if (ljgapd_srv.web_fd >= 0) close(ljgapd_srv.web_fd);

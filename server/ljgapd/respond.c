@@ -19,13 +19,6 @@
 
 #define PROBLEM_BASE LJGAP_PROBLEM_BASE /* a page of this server, as in handler.c */
 
-double ljgapd_seconds_since(const struct timespec *t0)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)(t.tv_sec - t0->tv_sec) + 1e-9 * (double)(t.tv_nsec - t0->tv_nsec);
-}
-
 /* Adds the common headers (and Retry-After to a 503 that has none: openapi.json says every 503
  * has it), queues resp and records the status. Takes ownership of resp. */
 static enum MHD_Result respond(struct MHD_Connection *c, request *r, int status,
