@@ -9,7 +9,7 @@
 # cores). Each one's output is captured and printed whole, followed by a comment line with its
 # time, in a fixed order (unit tests, then the suites by name) whatever order they end in; the
 # closing line is always the last line printed. The longest suites start first; the lab-server
-# suite, whose checks compare timings, runs last and alone.
+# suite, whose checks compare timings, and the memcheck suite run last, each alone.
 #
 #   tests/run.sh                    every unit test and suite but the memcheck suite
 #   MEMCHECK=1 tests/run.sh         the memcheck suite too (valgrind over five suites, ~5 min on
@@ -116,8 +116,9 @@ report() { # print every finished one from $next on, in order, until one still r
 }
 
 # The lab-server suite times its fairness and queue checks against each other: it runs last, on
-# its own (beside other suites on a loaded machine its fair-share check failed).
-alone=(tests/serve/run.sh)
+# its own (beside other suites on a loaded machine its fair-share check failed). So does the
+# memcheck suite when asked for (it runs the lab-server suite again, under valgrind).
+alone=(tests/serve/run.sh tests/memcheck/run.sh)
 is_alone() { case " ${alone[*]} " in *" ${names[$1]} "*) return 0 ;; esac; return 1; }
 running=0
 for pass_ in shared alone; do
