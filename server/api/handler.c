@@ -802,7 +802,6 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
     const endpoint_row *r = endpoint_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
-    out->cacheable = 0;
     int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
@@ -835,7 +834,6 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
     ljgap_topo_spec heights = {0};
     ljgap_verr ve = {0};
     cJSON *query = NULL;
-    out->cacheable = 0;
     char detail[DETAIL_LEN];
     job j;
     int form;
