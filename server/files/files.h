@@ -1,0 +1,86 @@
+/* files.h -- instrument files in: bytes of an AFM, profilometer or interferometer file out as a
+ * height map with its grid, physical size, units and what the file says about itself (issue 28).
+ *
+ * One module, one file per format behind this small interface. A reader never reads outside
+ * [buf, buf + len): every access goes through the bounded readers of bytes.h. Heights come out
+ * in metres, sizes in metres; a point the file marks as missing (NaN, a mask, a "no data"
+ * value) comes out as NaN and is counted in map->missing. Knows nothing of HTTP or JSON; the
+ * request layer (server/api) and the CLI use it.
+ *
+ *   ljgap_files_read(buf, len, format, channel, &map, &err)
+ *       format: NULL or "" to recognise the format from its magic bytes and structure, else a
+ *       format's name (ljgap_files_formats) to force it; channel: NULL or "" for the default
+ *       (the height channel), else a channel's index ("0", "1", ...) or title.
+ *       Returns 0, or LJGAP_FILES_UNKNOWN (no reader recognises the bytes, or an unknown
+ *       format name: 415), LJGAP_FILES_BAD (a reader recognised the format but the file is
+ *       truncated, corrupt or inconsistent: 422 bad-file; err says the format and the byte
+ *       offset or the member), LJGAP_FILES_CHANNEL (no such channel: 422 at the channel),
+ *       LJGAP_FILES_NOMEM, LJGAP_FILES_TOOBIG (the map would exceed LJGAP_FILES_MAX_POINTS).
+ *   ljgap_files_map_free(&map) releases it (also after a failure: always safe).
+ */
+#ifndef LJGAP_FILES_H
+#define LJGAP_FILES_H
+
+#include <stddef.h>
+
+#define LJGAP_FILES_UNKNOWN 1
+#define LJGAP_FILES_BAD 2
+#define LJGAP_FILES_CHANNEL 3
+#define LJGAP_FILES_NOMEM 4
+#define LJGAP_FILES_TOOBIG 5
+
+#define LJGAP_FILES_MAX_POINTS (4096u * 4096u) /* 16 M points (128 MiB of doubles) */
+#define LJGAP_FILES_MAX_CHANNELS 32
+#define LJGAP_FILES_TEXT 128 /* the size of the text fields below */
+
+typedef struct {
+    size_t nx, ny;       /* points along x (a row) and rows (along y); ny = 1: a profile */
+    double *z;           /* nx * ny heights in metres, row j at z[j * nx], NaN where missing */
+    double size_x;       /* the physical size along x and y in metres: nx * dx and ny * dy */
+    double size_y;       /*   (0 when the file does not state it: the query must give dx) */
+    size_t missing;      /* points marked missing (NaN in z) */
+    int periodic;        /* 1 when the file says the map is periodic, else 0 */
+    double tip_radius;   /* the probe's tip radius in metres where stored, else 0 */
+    const char *format;  /* the reader's name, e.g. "nanoscope" (static storage) */
+    char channel[LJGAP_FILES_TEXT];    /* the title of the channel read */
+    int channel_index;                 /* its index in channels[] */
+    char channels[LJGAP_FILES_MAX_CHANNELS][LJGAP_FILES_TEXT]; /* every channel's title */
+    int n_channels;
+    char z_unit[32];                   /* the height unit the file states ("nm", "m", "V"...) */
+    char instrument[LJGAP_FILES_TEXT]; /* instrument name/model where stored, else "" */
+    char acquired[40];                 /* date of the scan, ISO 8601 where stored, else "" */
+} ljgap_files_map;
+
+typedef struct {
+    char msg[256];      /* what is wrong, for the problem's detail */
+    const char *format; /* the format it was read as (NULL when unknown) */
+    long offset;        /* the byte offset of the fault, -1 when not applicable */
+    char member[64];    /* the member of a container (X3P's zip) or "" */
+} ljgap_files_err;
+
+/* One format: its name, its extensions (for docs and messages only: recognition is by
+ * content), whether bytes look like it (a cheap check of magic bytes and structure), and its
+ * reader (channel already defaulted: NULL means the height channel). */
+typedef struct {
+    const char *name;       /* "nanoscope", "x3p", "sur", "gwy", "gsf", "netcdf", "metropro",
+                             * "ibw", "park-tiff", "plu", "xyz" */
+    const char *extensions; /* ".spm .000 .di" */
+    const char *media_type; /* the format's own media type where one exists, else NULL */
+    int (*probe)(const unsigned char *buf, size_t len);
+    int (*read)(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                ljgap_files_err *err);
+} ljgap_files_format;
+
+int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
+                     const char *channel, ljgap_files_map *map, ljgap_files_err *err);
+void ljgap_files_map_free(ljgap_files_map *map);
+
+/* The formats read, in recognition order, NULL-terminated. */
+const ljgap_files_format *const *ljgap_files_formats(void);
+
+/* The readers (one file each, server/files/FORMAT.c). */
+extern const ljgap_files_format ljgap_files_nanoscope, ljgap_files_x3p, ljgap_files_sur,
+    ljgap_files_gwy, ljgap_files_gsf, ljgap_files_netcdf, ljgap_files_metropro, ljgap_files_ibw,
+    ljgap_files_park_tiff, ljgap_files_plu, ljgap_files_xyz;
+
+#endif
