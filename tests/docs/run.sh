@@ -2,7 +2,8 @@
 # The documentation stays true: docs/api.md against server/openapi.json (every operation, status,
 # field and problem type, both ways where it makes sense), the relative links of the README and
 # docs/ (files and #anchors), and the README's "Use from Python" examples run against a server
-# (standard library; requests + pandas reading the CSV). One "ok"/"not ok" line per check.
+# (standard library; requests + pandas reading the CSV), and the README's length (≤ 300 lines).
+# One "ok"/"not ok" line per check.
 #   BUILD=build tests/docs/run.sh
 set -u
 cd "$(dirname "$0")/../.."
@@ -10,6 +11,9 @@ cd "$(dirname "$0")/../.."
 
 python3 tests/docs/check.py api server/openapi.json docs/api.md
 python3 tests/docs/check.py links README.md docs/*.md
+# the README is a front door, not a manual (issue 27): at most 300 lines; the rest lives in docs/
+lines=$(wc -l <README.md)
+check "the README has at most 300 lines ($lines)" [ "$lines" -le 300 ]
 
 # Debian's python3 has the python3-requests and python3-pandas that make test installs (a
 # python3 earlier on PATH may be another installation without them).
