@@ -200,7 +200,7 @@ static const rule rules[] = {
     /* sweep */
     {"sweep_needs_power_law", "sweep",
      "{'psd':{'kind':'table','k':[1,2],'P':[1,1]},'vary':'m0','values':[0.1]}", "/psd/kind"},
-    {"sweep_vary_unknown", "sweep", WITH("'vary':'k2','values':[3]"), "/vary"},
+    {"sweep_vary_unknown", "sweep", WITH("'vary':'k3','values':[3]"), "/vary"},
     {"sweep_D_outside", "sweep", WITH("'vary':'D','values':[2.2,2.5,3.1]"), "/values/2"},
     {"sweep_k1_below_k0", "sweep", WITH("'vary':'k1','values':[2,0.3]"), "/values/1"},
     {"sweep_m0_zero", "sweep", WITH("'vary':'m0','values':[0.1,0]"), "/values/1"},
