@@ -254,6 +254,27 @@ static int solve_pdf(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_opts
 
 /* ---- writing ---- */
 
+/* A spread v as obj.key (array element when key is NULL); null when it could not be formed (too
+ * few perturbed PSDs answered: a warning says so; never NaN through put_num). */
+static void put_sd(job *j, cJSON *obj, const char *key, double v, const char *label, long idx)
+{
+    if (isfinite(v)) {
+        ljgap_ans_num(j, obj, key, v, label, idx);
+        return;
+    }
+    ljgap_ans_put(j, obj, key, cJSON_CreateNull());
+    ljgap_warn(&j->rq.warn, "input_error: a spread that too few perturbed PSDs answered is null");
+}
+
+/* n spreads as the array obj.key. */
+static void put_sds(job *j, cJSON *obj, const char *key, const double *v, size_t n,
+                    const char *label)
+{
+    cJSON *a = ljgap_ans_put(j, obj, key, cJSON_CreateArray());
+    for (size_t i = 0; a && i < n; i++)
+        put_sd(j, a, NULL, v[i], label, (long)i);
+}
+
 /* meta.input_error: how (once an answer). */
 static void put_meta(job *j, const pert *p, const ljgap_psd_spec *s)
 {
@@ -339,7 +360,7 @@ static cJSON *put_summary_sd(job *j, cJSON *obj, const char *key, const ljgap_su
     char l[80];
     for (size_t i = 0; o && i < 4; i++) {
         snprintf(l, sizeof l, "%s.%s", label, f[i].name);
-        ljgap_ans_num(j, o, f[i].name, f[i].v, l, -1);
+        put_sd(j, o, f[i].name, f[i].v, l, -1);
     }
     return o;
 }
@@ -361,7 +382,7 @@ static cJSON *put_summary_sd_si(job *j, cJSON *obj, const char *key, const ljgap
     ljgap_si_summary_of(&j->rq.mat, sd, &si);
     for (size_t i = 0; o && i < 4; i++) {
         snprintf(l, sizeof l, "%s.%s", label, f[i].name);
-        ljgap_ans_num(j, o, f[i].name, f[i].e->err, l, -1);
+        put_sd(j, o, f[i].name, f[i].e->err, l, -1);
     }
     return o;
 }
@@ -408,7 +429,10 @@ static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summar
     e = ljgap_ans_put(j, j->ans, "extrapolated", cJSON_CreateObject());
     ljgap_ans_num(j, e, "k_last", base.k[base.n - 1], "extrapolated.k_last", -1);
     ljgap_ans_num(j, e, "m0_fraction", mf, "extrapolated.m0_fraction", -1);
-    ljgap_ans_num(j, e, "dgamma_eff_fraction", df, "extrapolated.dgamma_eff_fraction", -1);
+    if (isfinite(df)) /* else null: the warning above says why */
+        ljgap_ans_num(j, e, "dgamma_eff_fraction", df, "extrapolated.dgamma_eff_fraction", -1);
+    else
+        ljgap_ans_put(j, e, "dgamma_eff_fraction", cJSON_CreateNull());
     if (mf > EXTRAP_WARN || df > EXTRAP_WARN)
         ljgap_warn(&j->rq.warn,
                    "%.0f %% of m0 and %.0f %% of dgamma_eff come from beyond the table's last "
@@ -479,11 +503,10 @@ void ljgap_ie_traction(job *j, const ljgap_summary *sum)
                 pt[rq->nx + i] = pt[i] * (rq->has_material ? ljgap_units_sigma0(&rq->mat) : 1);
             }
             ie = ljgap_ans_put(j, j->ans, "input_error", cJSON_CreateObject());
-            ljgap_ans_nums(j, ie, "sigma", pt, rq->nx, sizeof *pt, "input_error.sigma");
+            put_sds(j, ie, "sigma", pt, rq->nx, "input_error.sigma");
             put_summary_sd(j, ie, "summary", &sd, "input_error.summary");
             if (si && (sie = ljgap_ans_put(j, si, "input_error", cJSON_CreateObject()))) {
-                ljgap_ans_nums(j, sie, "sigma_Pa", pt + rq->nx, rq->nx, sizeof *pt,
-                               "si.input_error.sigma_Pa");
+                put_sds(j, sie, "sigma_Pa", pt + rq->nx, rq->nx, "si.input_error.sigma_Pa");
                 put_summary_sd_si(j, sie, "summary", &sd, "si.input_error.summary");
             }
         }
@@ -524,12 +547,11 @@ void ljgap_ie_pdf(job *j)
             for (size_t k = 0; k < p.K; k++)
                 x[k] = c.p[k * rq->nx + i].sigma.value;
             sd = pert_sd(&p, x, ok);
-            ljgap_ans_num(j, ljgap_ans_put(j, arr, NULL, cJSON_CreateObject()), "sigma", sd,
-                          "input_error.pdfs.sigma", (long)i);
+            put_sd(j, ljgap_ans_put(j, arr, NULL, cJSON_CreateObject()), "sigma", sd,
+                   "input_error.pdfs.sigma", (long)i);
             if (sarr)
-                ljgap_ans_num(j, ljgap_ans_put(j, sarr, NULL, cJSON_CreateObject()), "sigma_Pa",
-                              sd * ljgap_units_sigma0(&rq->mat), "si.input_error.pdfs.sigma_Pa",
-                              (long)i);
+                put_sd(j, ljgap_ans_put(j, sarr, NULL, cJSON_CreateObject()), "sigma_Pa",
+                       sd * ljgap_units_sigma0(&rq->mat), "si.input_error.pdfs.sigma_Pa", (long)i);
         }
     }
     for (size_t k = 0; k < p.K; k++)
@@ -560,12 +582,10 @@ void ljgap_ie_contact(job *j, const ljgap_summary *sum)
         ie = put_summary_sd(j, j->ans, "input_error", &sd, "input_error");
         po = ljgap_ans_put(j, ie, "pull_off_N", cJSON_CreateObject());
         for (size_t f = 0; po && f < 4; f++)
-            ljgap_ans_num(j, po, names[f], pert_sd(&p, x[f], okc), "input_error.pull_off_N",
-                          (long)f);
-        ljgap_ans_num(j, ljgap_ans_put(j, ie, "tabor", cJSON_CreateObject()), "effective",
-                      pert_sd(&p, x[4], okc), "input_error.tabor.effective", -1);
-        ljgap_ans_num(j, ie, "maugis_lambda", pert_sd(&p, x[5], okc), "input_error.maugis_lambda",
-                      -1);
+            put_sd(j, po, names[f], pert_sd(&p, x[f], okc), "input_error.pull_off_N", (long)f);
+        put_sd(j, ljgap_ans_put(j, ie, "tabor", cJSON_CreateObject()), "effective",
+               pert_sd(&p, x[4], okc), "input_error.tabor.effective", -1);
+        put_sd(j, ie, "maugis_lambda", pert_sd(&p, x[5], okc), "input_error.maugis_lambda", -1);
         if (si) put_summary_sd_si(j, si, "input_error", &sd, "si.input_error");
         pert_free(&p);
     }
