@@ -311,7 +311,8 @@ static void put_meta(job *j, const pert *p, const ljgap_psd_spec *s)
                  p->K, s->P_corr ? " and P_corr" : "");
         ljgap_ans_put(j, m, "detail", cJSON_CreateString(d));
     }
-    ljgap_ans_num(j, m, "tol", fmax(j->rq.opts.tol, IE_TOL), "meta.input_error.tol", -1);
+    ljgap_ans_num(j, m, "solves_tol", fmax(j->rq.opts.tol, IE_TOL), "meta.input_error.solves_tol",
+                  -1);
 }
 
 /* The summary's four spreads, from the K summaries; one warning naming those within 3 times
