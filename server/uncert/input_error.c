@@ -30,16 +30,21 @@
 #include <string.h>
 #include <unistd.h>
 
-#define IE_K 12      /* draws of a table PSD */
-#define IE_SEED 29ul /* their seed: fixed, so that an answer is reproducible */
-#define IE_TOL                                                                                     \
-    1e-4                /* the perturbed solves' tol, at least (their solver error is then         \
-                         * far below the spread they measure; summary_sd checks it) */
-#define EXTRAP_WARN 0.1 /* warn when more than this comes from beyond the last knot */
+/* draws of a table PSD, and their seed (fixed: an answer is reproducible, so cacheable) */
+#define IE_K 12
+#define IE_SEED 29ul
+/* the perturbed solves' tol, at least: their solver error (1e-3 relative) is then far below the
+ * spread they measure (summary_sd checks it) */
+#define IE_TOL 1e-3
+/* the tol of the solve of the table cut at its last knot, at least: a fraction wanted to 1e-3
+ * (the cut makes the band finite, which the solver resolves slowly) */
+#define CUT_TOL 1e-3
+/* warn when more than this of m0 or dgamma_eff comes from beyond the last knot */
+#define EXTRAP_WARN 0.1
 #define IE_THREADS_MAX 16
-#define CORR_SCALE_WARN                                                                            \
-    0.8 /* warn when P_corr had to be scaled below this to be sampled (a                           \
-         * tridiagonal cut of /v1/psd's knot covariance may need 0.9) */
+/* warn when P_corr had to be scaled below this to be sampled (a tridiagonal cut of /v1/psd's
+ * knot covariance may need 0.9) */
+#define CORR_SCALE_WARN 0.8
 
 /* The perturbed PSDs of one psd spec. */
 typedef struct {
@@ -410,7 +415,7 @@ static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summar
     }
     mf = ljgap_uncert_beyond(&base, base.k[base.n - 1]);
     if (mf > 0) {
-        if (o.tol < IE_TOL) o.tol = IE_TOL; /* a fraction, to 1e-4 of dgamma_eff */
+        if (o.tol < CUT_TOL) o.tol = CUT_TOL; /* a fraction, wanted to 1e-3 of dgamma_eff */
         o.max_seconds = j->deadline - ljgap_clock_now();
         o.cancel = j->cancel;
         st = o.max_seconds > 0 ? ljgap_psd_truncate(&cut, &base, base.k[base.n - 1]) : LJGAP_ECAP;
