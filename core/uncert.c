@@ -1,5 +1,5 @@
 /* uncert.c -- perturbed PSDs from a measurement's errors, and the spread of what they give
- * (ljgap_uncert.h; docs/theory.md §8).
+ * (ljgap_uncert.h; docs/theory.md §9).
  *
  * A table's knots are drawn in ln P: a knot's error is relative (a periodogram bin's is P/√N),
  * the draws stay positive, and the variance ln(1 + r²) matches a log-normal's to the given

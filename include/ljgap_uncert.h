@@ -18,7 +18,7 @@
  *     σ_f² = Σ_p ((f(p + hσ_p) − f(p − hσ_p))/(2h))², parameters independent.
  *
  * The draws come from a fixed seed, so an answer is reproducible and cacheable. Knows nothing
- * of JSON; docs/theory.md §8 states the method and its test.
+ * of JSON; docs/theory.md §9 states the method and its test.
  */
 #ifndef LJGAP_UNCERT_H
 #define LJGAP_UNCERT_H

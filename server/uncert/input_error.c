@@ -15,7 +15,7 @@
  *     parameters independent: 2 solves a parameter.
  * For a table, "extrapolated" says how much of m0 and of Δγeff comes from beyond its last knot
  * (the tail: an assumption, not a measurement), with one more solve of the table cut there;
- * above EXTRAP_WARN a warning. docs/theory.md §8 has the method and its test over independent
+ * above EXTRAP_WARN a warning. docs/theory.md §9 has the method and its test over independent
  * maps.
  */
 #include "input_error.h"
