@@ -245,7 +245,8 @@ static int solve_curve(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_op
 
 typedef struct {
     const ljgap_request *rq;
-    ljgap_pdf *p; /* K × nx */
+    double *sigma; /* K × nx: each PDF's mean traction (the PDFs themselves are let go at once:
+                    * a perturbed solve holds no more memory than the nominal one) */
 } pdf_ctx;
 
 static int solve_pdf(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_opts *o,
@@ -253,8 +254,15 @@ static int solve_pdf(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_opts
 {
     pdf_ctx *c = ctx;
     const ljgap_request *rq = c->rq;
-    return ljgap_pdf_compute(psd, o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL,
-                             c->p + k * rq->nx, w);
+    ljgap_pdf *p = calloc(rq->nx, sizeof *p);
+    int st = p ? ljgap_pdf_compute(psd, o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL,
+                                   p, w)
+               : LJGAP_ENOMEM;
+    for (size_t i = 0; !st && i < rq->nx; i++)
+        c->sigma[k * rq->nx + i] = p[i].sigma.value;
+    if (p) ljgap_pdf_release(p, rq->nx);
+    free(p);
+    return st;
 }
 
 /* ---- writing ---- */
@@ -537,7 +545,7 @@ void ljgap_ie_pdf(job *j)
     }
     if (!p.K) return;
     put_meta(j, &p, &rq->psd);
-    if (!(c.p = calloc(p.K * rq->nx, sizeof *c.p))) {
+    if (!(c.sigma = calloc(p.K * rq->nx, sizeof *c.sigma))) {
         j->oom = 1;
         pert_free(&p);
         return;
@@ -551,7 +559,7 @@ void ljgap_ie_pdf(job *j)
         for (size_t i = 0; arr && i < rq->nx; i++) {
             double sd;
             for (size_t k = 0; k < p.K; k++)
-                x[k] = c.p[k * rq->nx + i].sigma.value;
+                x[k] = c.sigma[k * rq->nx + i];
             sd = pert_sd(&p, x, ok);
             put_sd(j, ljgap_ans_put(j, arr, NULL, cJSON_CreateObject()), "sigma", sd,
                    "input_error.pdfs.sigma", (long)i);
@@ -560,9 +568,7 @@ void ljgap_ie_pdf(job *j)
                        sd * ljgap_units_sigma0(&rq->mat), "si.input_error.pdfs.sigma_Pa", (long)i);
         }
     }
-    for (size_t k = 0; k < p.K; k++)
-        ljgap_pdf_release(c.p + k * rq->nx, rq->nx);
-    free(c.p);
+    free(c.sigma);
     pert_free(&p);
 }
 

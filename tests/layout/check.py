@@ -5,7 +5,8 @@
                      NAME.c with NAME.h in one folder; an #include "x.h" is resolved as the
                      compiler does, the including file's folder first, then the Makefile's -I
                      folders) has no cycle; core/ and include/ include nothing from server/;
-                     server/api/ includes nothing from jobs/, ljgapd/ or cli/, and server/jobs/
+                     server/api/ and server/uncert/ include nothing from jobs/, ljgapd/ or cli/,
+                     and server/jobs/
                      nothing from ljgapd/ or cli/ (the daemon and the CLI sit on top)
   check.py sizes     no .c or .h file of core/, include/, server/ or tools/ is over 900 lines
                      (but those in PENDING, which may not grow) and no folder holds more than
