@@ -85,6 +85,7 @@
   }
 
   let loadedTail = null; /* the tail of the spectrum "Use this spectrum" loaded */
+  let loadedCorr = null; /* and its knots' correlations {text, P_corr}, while the table is its */
   function psdObject() {
     if (document.querySelector('input[name="kind"]:checked').value === "table") {
       const psd = { kind: "table", ...parseTable($("table").value) };
@@ -92,6 +93,8 @@
       if (q !== undefined) psd.tail = { exponent: q };
       /* a measured spectrum's tail keeps its error while the field holds its exponent */
       if (loadedTail && q === loadedTail.exponent && loadedTail.exponent_err !== undefined) psd.tail.exponent_err = loadedTail.exponent_err;
+      /* and its knots' correlations while the table text is the one loaded (issue 29) */
+      if (loadedCorr && psd.P_err && $("table").value === loadedCorr.text && loadedCorr.P_corr.length === psd.k.length - 1) psd.P_corr = loadedCorr.P_corr;
       return psd;
     }
     const psd = { kind: "power" };
@@ -351,8 +354,17 @@
     return tr;
   }
 
-  /* The adhesion fields s with their errors e; with a material, in SI too (si, its errors sie). */
-  function summaryTable(s, e, si, sie) {
+  /* "Δγeff/Δγ = x ± y (measurement) ± z (solver)": the measurement's uncertainty ie (1 σ, the
+   * answer's input_error) beside the solver's error e; nothing without ie. */
+  function uncertLine(s, e, ie) {
+    if (!ie || typeof ie.dgamma_eff !== "number") return [];
+    return [el("div", { class: "uncert" }, `Δγeff/Δγ = ${fmt(s.dgamma_eff, 3)} ± ${fmt(ie.dgamma_eff, 2)} (measurement) ± ${errFmt(e.dgamma_eff)} (solver)`)];
+  }
+
+  /* The adhesion fields s with their errors e; with a material, in SI too (si, its errors sie);
+   * ie: the measurement's uncertainty (an adhesion answer's own input_error when not given). */
+  function summaryTable(s, e, si, sie, ie) {
+    ie = ie || s.input_error;
     e = e || {};
     si = si || {};
     sie = sie || {};
@@ -362,6 +374,7 @@
     return el(
       "table",
       {},
+      ...uncertLine(s, e, ie).map((d) => el("caption", {}, d)),
       el("tr", {}, ...["quantity", "value (ε, σ0, Δγ)", "± err", ...(hasSI ? ["SI"] : [])].map((h) => el("th", {}, h))),
       row("g̃eq", s.g_eq, e.g_eq, siv("g_eq_m", "m")),
       row("σ̄max/σ0", s.sigma_max, e.sigma_max, siv("sigma_max_Pa", "Pa")),
@@ -386,6 +399,9 @@
     const g = ans.g_ave.map((x) => x * gx);
     const sig = ans.sigma.map((v) => v * sy);
     const area = ans.g_ave.map((x, i) => (s.g_eq !== null && x >= s.g_eq ? sig[i] : null));
+    /* the measurement's uncertainty, ±1 σ about the curve (input_error.sigma), as a band */
+    const ie = ans.input_error && (si ? ans.si.input_error.sigma_Pa : ans.input_error.sigma);
+    const side = (f) => sig.map((v, i) => (ie && typeof ie[i] === "number" ? v + f * ie[i] : null));
     const flat = ans.g_ave.map((x) => flatLJ(x) * sy);
     p.xName = si ? "g_ave [m]" : "g_ave";
     p.series = [
@@ -400,6 +416,15 @@
         width: 0,
       },
     ];
+    const bands = [];
+    if (ie) {
+      const n = p.series.length;
+      p.series.push(
+        { name: "σ̄ + input_error (1σ)", x: g, y: side(1), color: "rgba(214,120,20,0.7)", width: 1 },
+        { name: "σ̄ − input_error (1σ)", x: g, y: side(-1), color: "rgba(214,120,20,0.7)", width: 1 }
+      );
+      bands.push({ hi: n, lo: n + 1, fill: "rgba(214,120,20,0.16)" });
+    }
     const pos = Math.max(...sig.filter(Number.isFinite), ...flat);
     const marks = [];
     if (s.g_eq !== null) {
@@ -420,17 +445,18 @@
       xName: si ? "gave (m)" : "g̃ave",
       yLabel: si ? "σ̄ (Pa)" : "σ̄/σ0",
       series: p.series,
+      bands,
       marks,
       params: p.params,
       yClamp: [-1.5 * pos, 1.05 * sy],
     });
     const ro = $("readout-traction");
     ro.replaceChildren(
-      summaryTable(s, ans.error.summary, ans.si && ans.si.summary, ans.si && ans.si.error.summary),
+      summaryTable(s, ans.error.summary, ans.si && ans.si.summary, ans.si && ans.si.error.summary, ans.input_error && ans.input_error.summary),
       el(
         "div",
         { class: "meta" },
-        `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)`
+        `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)${ie ? "; orange band: ± the measurement's uncertainty (input_error, 1 σ)" : ""}`
       ),
       forLine(p),
       metaLine(ans),
@@ -805,6 +831,7 @@
     $("table").value = [`# ${label}`, head, ...rows].join("\n");
     $("tail").value = q.tail ? String(q.tail.exponent) : "";
     loadedTail = q.tail || null;
+    loadedCorr = q.P_corr && q.P_err ? { text: $("table").value, P_corr: q.P_corr } : null;
     if (unitsNow !== "SI") convertFields(true, { table: false }); /* the power law's fields and the sweep follow */
     $("units").value = "SI";
     unitsNow = "SI";

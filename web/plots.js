@@ -1,7 +1,7 @@
 /* plots.js -- the page's charts: thin wrappers around uPlot (web/vendor/uPlot.iife.min.js).
  *
  * Each chart is described by a "figure": {title, xLabel, yLabel, xLog, yLog, series:[{name, x[],
- * y[], err[]?, color, dash?, fill?, points?}], marks:[…], xRange?, yClamp?, yZero?}. draw(el, fig) joins the
+ * y[], err[]?, color, dash?, fill?, points?}], bands?:[{hi, lo, fill}], marks:[…], xRange?, yClamp?, yZero?}. draw(el, fig) joins the
  * series on one x axis (uPlot.join), draws them, adds the marks (vertical lines and labelled
  * points, drawn on the canvas so that they appear in the PNG too) and keeps the chart as wide as
  * its box. The legend under each chart is uPlot's live legend: hovering reads out every series at
@@ -179,6 +179,8 @@ const LJPlots = (() => {
         y: { distr: fig.yLog ? 3 : 1, log: 10, range: yRange(fig) },
       },
       axes: [axis(fig.xLabel, fig.xLog, {}, k), axis(fig.yLabel, fig.yLog, { size: 64 * k }, k)],
+      /* fig.bands: [{hi, lo, fill}], the area between two of fig.series (indices) filled */
+      bands: (fig.bands || []).map((b) => ({ series: [b.hi + 1, b.lo + 1], fill: b.fill })),
       legend: { live: true, show: k === 1 },
       cursor: { drag: { x: true, y: false }, show: k === 1 },
       hooks: { draw: [(u) => drawErrorBars(u, fig, k), (u) => drawMarks(u, fig.marks || [], k)] },

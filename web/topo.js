@@ -398,6 +398,7 @@ const LJTopo = (() => {
     const k = [];
     const P = [];
     const E = [];
+    const at0 = []; /* each knot's index in o (-1: interpolated), for P_corr */
     const n = o.k.length;
     const atErr = (x) => {
       let i = 0;
@@ -406,12 +407,14 @@ const LJTopo = (() => {
       const p = at(o, x);
       return p * ((1 - t) * (o.P_err[i] / o.P[i]) + t * (o.P_err[i + 1] / o.P[i + 1]));
     };
-    if (k1 > o.k[0] && k1 < o.k[n - 1]) k.push(k1), P.push(at(o, k1)), E.push(atErr(k1));
+    if (k1 > o.k[0] && k1 < o.k[n - 1]) k.push(k1), P.push(at(o, k1)), E.push(atErr(k1)), at0.push(-1);
     o.k.forEach((x, i) => {
-      if (x >= k1 && (k2 === null || x <= k2) && !(k.length && x <= k[k.length - 1])) k.push(x), P.push(o.P[i]), E.push(o.P_err[i]);
+      if (x >= k1 && (k2 === null || x <= k2) && !(k.length && x <= k[k.length - 1])) k.push(x), P.push(o.P[i]), E.push(o.P_err[i]), at0.push(i);
     });
-    if (k2 !== null && k2 > o.k[0] && k2 < o.k[n - 1] && k[k.length - 1] < k2) k.push(k2), P.push(at(o, k2)), E.push(atErr(k2));
+    if (k2 !== null && k2 > o.k[0] && k2 < o.k[n - 1] && k[k.length - 1] < k2) k.push(k2), P.push(at(o, k2)), E.push(atErr(k2)), at0.push(-1);
     const out = { kind: "table", k, P, P_err: E };
+    /* the neighbours' correlation of the knots kept side by side (an interpolated knot: 0) */
+    if (o.P_corr && k.length > 1) out.P_corr = at0.slice(1).map((j, m) => (at0[m] >= 0 && j === at0[m] + 1 ? o.P_corr[at0[m]] : 0));
     if (k2 === null && o.tail) out.tail = o.tail;
     return out;
   }

@@ -42,6 +42,8 @@ typedef struct {
                                                        * or starting with a space */
     const char *bad_ptr;  /* pointer of an LJGAP_EINVAL problem (NULL: "/psd") */
     const char *bad_head; /* its detail's first words (NULL: the PSD's) */
+    cJSON *ie_meta;       /* meta.input_error, how the input's uncertainty was carried (owned
+                           * until ljgap_ans_meta places it; server/uncert/input_error.c) */
 } job;
 
 /* item into parent (member key, or array element when key is NULL); NULL (j->oom) on failure */

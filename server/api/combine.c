@@ -43,7 +43,7 @@ void ljgap_combine_spec_free(struct ljgap_combine_spec *s)
 }
 
 static const char *const combine_fields[] = {"psds", "points_per_decade", "material", NULL};
-static const char *const psd_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
+static const char *const psd_fields[] = {"kind", "k", "P", "P_err", "P_corr", "tail", NULL};
 static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 static const char *const col_names[3] = {"k", "P", "P_err"};
 
@@ -117,6 +117,31 @@ static void parse_tail(ljgap_verr *e, const cJSON *tail, const char *base, ljgap
         ljgap_verr_add(e, eptr, "must be zero or positive (got %g)", in->tail_q_err);
 }
 
+/* An input's P_corr (/v1/psd's neighbouring knots' correlations, n - 1 in [-1, 1]): checked, not
+ * used (the combination takes the bins as independent and interpolates their errors as if fully
+ * correlated, the conservative bound: docs/topography.md). */
+static void check_corr(ljgap_verr *e, const cJSON *pc, const char *base, size_t n)
+{
+    char ptr[PTR];
+    const cJSON *it;
+    size_t j = 0, nc;
+    double r;
+    snprintf(ptr, sizeof ptr, "%s/P_corr", base);
+    if (!(nc = ljgap_v_array(e, pc, ptr, 1, TABLE_MAX, "one correlation per pair of neighbours")))
+        return;
+    if (n && nc != n - 1) {
+        ljgap_verr_add(e, ptr, "has %zu entries but k has %zu: give one per pair of neighbours", nc,
+                       n);
+        return;
+    }
+    cJSON_ArrayForEach(it, pc)
+    {
+        snprintf(ptr, sizeof ptr, "%s/P_corr/%zu", base, j++);
+        if (ljgap_v_num(e, it, ptr, &r) && !(fabs(r) <= 1))
+            ljgap_verr_add(e, ptr, "a correlation lies in [-1, 1] (got %g)", r);
+    }
+}
+
 /* psds[i] (pointer base) into s->in[i]. */
 static void parse_one(ljgap_verr *e, const cJSON *psd, const char *base,
                       struct ljgap_combine_spec *s, size_t i)
@@ -154,6 +179,7 @@ static void parse_one(ljgap_verr *e, const cJSON *psd, const char *base,
         }
     if ((tail = cJSON_GetObjectItemCaseSensitive(psd, "tail")))
         parse_tail(e, tail, base, &s->in[i]);
+    if ((tail = cJSON_GetObjectItemCaseSensitive(psd, "P_corr"))) check_corr(e, tail, base, n[0]);
     if (!n[0] || n[1] != n[0] || n[2] != n[0]) return;
     for (int c = 0; c < 3; c++)
         s->col[i][c] = column(e, col[c], base, c, n[0], s->col[i][1]);

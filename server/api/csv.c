@@ -38,6 +38,7 @@ static const struct {
     {"m0_realized", "eps^2"},
     {"k0", "1/chi"},
     {"k2", "1/chi"},
+    {"k_last", "1/chi"},
     {"L", "chi"},
     {"phi", "1/eps"},
     {"elapsed_ms", "ms"},
@@ -147,7 +148,7 @@ typedef struct {
     double factor;      /* 0: as they are; else each number times this */
 } column;
 
-#define MAX_COLS 24
+#define MAX_COLS 32
 
 static void put_header(ljgap_textbuf *b, const column *c, int n)
 {
@@ -204,10 +205,14 @@ static void csv_traction(ljgap_textbuf *b, const cJSON *ans)
     add(c, &n, "g_ave", NULL, get(ans, "g_ave"), 0);
     add(c, &n, "sigma", NULL, get(ans, "sigma"), 0);
     add(c, &n, "sigma_err", "sigma0", get(err, "sigma"), 0);
+    if (get(ans, "input_error")) /* the measurement's uncertainty, when the PSD has one */
+        add(c, &n, "sigma_input_err", "sigma0", get(get(ans, "input_error"), "sigma"), 0);
     if (si) {
         add(c, &n, "g_ave_m", NULL, get(si, "g_ave_m"), 0);
         add(c, &n, "sigma_Pa", NULL, get(si, "sigma_Pa"), 0);
         add(c, &n, "sigma_Pa_err", "Pa", get(get(si, "error"), "sigma_Pa"), 0);
+        if (get(si, "input_error"))
+            add(c, &n, "sigma_Pa_input_err", "Pa", get(get(si, "input_error"), "sigma_Pa"), 0);
     }
     put_header(b, c, n);
     put_rows(b, NULL, c, n);
@@ -231,11 +236,19 @@ static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
         comments(b, p, cJSON_GetArrayItem(pdfs, i), e);
         snprintf(p, sizeof p, "error.pdfs[%d].phi_l1", i);
         comment(b, p, "phi_l1", get(e, "phi_l1"), NULL);
+        if ((e = cJSON_GetArrayItem(get(get(ans, "input_error"), "pdfs"), i))) {
+            snprintf(p, sizeof p, "input_error.pdfs[%d].sigma", i);
+            comment(b, p, "sigma", get(e, "sigma"), NULL);
+        }
         if (!sipdfs) continue;
         snprintf(p, sizeof p, "si.pdfs[%d]", i);
         comments(b, p, cJSON_GetArrayItem(sipdfs, i), se);
         snprintf(p, sizeof p, "si.error.pdfs[%d].phi_l1", i);
         comment(b, p, "phi_l1", get(se, "phi_l1"), NULL);
+        if ((se = cJSON_GetArrayItem(get(get(si, "input_error"), "pdfs"), i))) {
+            snprintf(p, sizeof p, "si.input_error.pdfs[%d].sigma_Pa", i);
+            comment(b, p, "sigma_Pa", get(se, "sigma_Pa"), NULL);
+        }
     }
     ljgap_textbuf_printf(b, "pdf,k2 [1/chi],g [eps],phi [1/eps]%s\n",
                          si ? ",g_m [m],phi_per_m [1/m]" : "");
@@ -262,7 +275,7 @@ static const char *vary_unit(const char *vary, int si_psd)
 {
     if (!vary) return NULL;
     if (!strcmp(vary, "m0")) return si_psd ? "m^2" : "eps^2";
-    if (!strcmp(vary, "k1")) return si_psd ? "1/m" : "1/chi";
+    if (!strcmp(vary, "k1") || !strcmp(vary, "k2")) return si_psd ? "1/m" : "1/chi";
     if (!strcmp(vary, "C")) return si_psd ? "m^(2D-4)" : "eps^2 chi^(2D-6)";
     return "1"; /* D */
 }
@@ -290,7 +303,10 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
     const cJSON *sires = get(si, "results");
     cJSON *cols = cJSON_CreateArray(); /* the results' fields, pulled out into arrays */
     column c[MAX_COLS];
-    int n = 0, ok = cols != NULL;
+    int n = 0, ok = cols != NULL, ie = 0;
+    char ie_names[16][40]; /* NAME_input_err of the fields with an error */
+    for (const cJSON *r = res ? res->child : NULL; r; r = r->next)
+        ie |= get(r, "input_error") != NULL; /* the measurement's uncertainty: its columns */
     ljgap_textbuf_printf(b, "# ljgap sweep: the adhesion quantities for each value of the "
                             "varied PSD field, one row per value\n");
     comments(b, "", ans, NULL);
@@ -299,24 +315,34 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
     for (size_t f = 0; ok && f < sizeof fields / sizeof fields[0]; f++) {
         const char *name = fields[f].name;
         const cJSON *src = fields[f].si ? sires : res;
-        cJSON *a, *ea;
+        cJSON *a, *ea, *ia;
         if (fields[f].si && !si) break;
         a = cJSON_CreateArray();
         ea = fields[f].err ? cJSON_CreateArray() : NULL;
-        ok = a && (!fields[f].err || ea) && cJSON_AddItemToArray(cols, a) &&
-             (!ea || cJSON_AddItemToArray(cols, ea));
+        ia = fields[f].err && ie ? cJSON_CreateArray() : NULL;
+        ok = a && (!fields[f].err || ea) && (!(fields[f].err && ie) || ia) &&
+             cJSON_AddItemToArray(cols, a) && (!ea || cJSON_AddItemToArray(cols, ea)) &&
+             (!ia || cJSON_AddItemToArray(cols, ia));
         if (!ok) {
             cJSON_Delete(a);
             cJSON_Delete(ea);
+            cJSON_Delete(ia);
             break;
         }
         for (const cJSON *r = src ? src->child : NULL; ok && r; r = r->next) {
             const cJSON *v = get(r, name), *e = get(get(r, "error"), name);
-            ok = cJSON_AddItemToArray(a, v ? cJSON_Duplicate(v, 0) : cJSON_CreateNull()) &&
-                 (!ea || cJSON_AddItemToArray(ea, e ? cJSON_Duplicate(e, 0) : cJSON_CreateNull()));
+            const cJSON *u = get(get(r, "input_error"), name);
+            ok =
+                cJSON_AddItemToArray(a, v ? cJSON_Duplicate(v, 0) : cJSON_CreateNull()) &&
+                (!ea || cJSON_AddItemToArray(ea, e ? cJSON_Duplicate(e, 0) : cJSON_CreateNull())) &&
+                (!ia || cJSON_AddItemToArray(ia, u ? cJSON_Duplicate(u, 0) : cJSON_CreateNull()));
         }
         add(c, &n, name, NULL, a, 0);
         if (ea) add(c, &n, fields[f].err, unit_of(name), ea, 0);
+        if (ia) {
+            snprintf(ie_names[f], sizeof ie_names[0], "%s_input_err", name);
+            add(c, &n, ie_names[f], unit_of(name), ia, 0);
+        }
     }
     if (!ok) {
         b->oom = 1;

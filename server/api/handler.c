@@ -46,6 +46,7 @@
 #include "accept.h"
 #include "answer.h"
 #include "csv.h"
+#include "input_error.h" /* the measurement's uncertainty: ljgap_ie_* */
 #include "ljgap_sim.h"
 #include "ljgap_topo.h"
 #include "problems.h"
@@ -272,6 +273,7 @@ void ljgap_ans_meta(job *j, double t0)
     w = put(j, meta, "warnings", cJSON_CreateArray());
     for (int i = 0; w && i < j->rq.warn.n; i++)
         put(j, w, NULL, cJSON_CreateString(j->rq.warn.msg[i]));
+    if (j->ie_meta) put(j, meta, "input_error", j->ie_meta), j->ie_meta = NULL; /* taken */
     put(j, meta, "cached", cJSON_CreateFalse()); /* last: LJGAP_REPLY_UNCACHED_TAIL (reply.h) */
 }
 
@@ -320,6 +322,7 @@ static int run_adhesion(job *j)
     if (st) return st;
     ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
     put_si(j, j->ans, &sum);
+    ljgap_ie_adhesion(j, &sum);
     return LJGAP_OK;
 }
 
@@ -357,6 +360,7 @@ static int run_traction(job *j)
         put_si_summary(j, sum_obj, err, "summary", &sum);
         free(pt);
     }
+    ljgap_ie_traction(j, &sum);
 end:
     free(sigma);
     return st;
@@ -419,6 +423,7 @@ static int run_pdf(job *j)
         put_num(j, e, "phi_l1", p[i].phi_err, "error.pdfs.phi_l1", (long)i);
         put_num(j, e, "sigma", p[i].sigma.err, "error.pdfs.sigma", (long)i);
     }
+    ljgap_ie_pdf(j);
 end:
     if (p) ljgap_pdf_release(p, rq->nx);
     free(p);
@@ -524,6 +529,7 @@ static int run_sweep(job *j)
         snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
         st = LJGAP_EFAIL;
     }
+    ljgap_ie_sweep(j, sw.sum, sw.st); /* the values computed; nothing when the sweep failed */
 end:
     free(sw.sum);
     free(sw.w);
@@ -567,6 +573,7 @@ static int run_contact(job *j)
     put(j, j->ans, "regime", cJSON_CreateString(ljgap_regime_name(c.regime)));
     put_num(j, j->ans, "R", j->rq.R, "R", -1);
     put_si(j, j->ans, &sum);
+    ljgap_ie_contact(j, &sum);
     return LJGAP_OK;
 }
 
@@ -788,6 +795,7 @@ static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
         ljgap_ans_oom(out);
     cJSON_Delete(j->ans);
     j->ans = NULL;
+    cJSON_Delete(j->ie_meta); /* a failed run's (ljgap_ans_meta took a good one's) */
 }
 
 void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)

@@ -79,6 +79,10 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
     }
     if (st == LJGAP_OK) {
         ljgap_ans_table_psd(j, t.k, t.P, t.P_err, t.n, tail ? q : NAN, 2 * r->fit.D.err, m0);
+        /* the knots' errors are correlated with their neighbours' (the table's solve): the
+         * adhesion endpoints sample them with it (input_error) */
+        ljgap_ans_nums(j, cJSON_GetObjectItemCaseSensitive(j->ans, "psd"), "P_corr", t.corr,
+                       t.n - 1, sizeof *t.corr, "psd.P_corr");
         if (!tail)
             ljgap_warn(
                 &j->rq.warn, "the psd object has no tail: %s, so the table ends at k = %g 1/m",

@@ -48,8 +48,9 @@
 #define R_MAX 1e6
 #define PTR_LEN 96 /* room for every pointer built from known names */
 
-static const char *const common_fields[] = {"psd",     "method", "tol",      "vmax",  "fixed_vmax",
-                                            "samples", "seed",   "material", "units", NULL};
+static const char *const common_fields[] = {"psd",        "method",      "tol",  "vmax",
+                                            "fixed_vmax", "samples",     "seed", "material",
+                                            "units",      "input_error", NULL};
 static const char *const contact_fields[] = {"R", NULL};
 static const char *const material_fields[] = {"E_star", "E1",     "nu1",     "E2",
                                               "nu2",    "dgamma", "epsilon", NULL};
@@ -433,6 +434,13 @@ static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *l
         if (rq->opts.method != LJGAP_METHOD_PAPER)
             ljgap_warn(&rq->warn, "vmax is used by method \"paper\" only and was ignored");
     }
+    rq->input_error = 1;
+    if ((it = member(root, "input_error"))) {
+        if (!cJSON_IsBool(it))
+            ljgap_verr_add(e, "/input_error", "input_error must be true or false");
+        else
+            rq->input_error = cJSON_IsTrue(it);
+    }
     if ((it = member(root, "fixed_vmax"))) {
         if (!cJSON_IsBool(it))
             ljgap_verr_add(e, "/fixed_vmax", "fixed_vmax must be true or false");
@@ -546,15 +554,18 @@ static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
 static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
                         ljgap_request *rq)
 {
-    static const char *const names[] = {"m0", "C", "D", "k1", NULL};
-    static const ljgap_vary varies[] = {LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1};
-    const cJSON *v = required(e, root, "", "vary", "\"m0\", \"C\", \"D\" or \"k1\"");
+    static const char *const names[] = {"m0", "C", "D", "k1", "k2", NULL};
+    static const ljgap_vary varies[] = {LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1,
+                                        LJGAP_VARY_K2};
+    const cJSON *v = required(e, root, "", "vary", "\"m0\", \"C\", \"D\", \"k1\" or \"k2\"");
     const cJSON *vals = required(e, root, "", "values", "the values of the varied field");
     const cJSON *it;
     size_t i = 0;
     char ptr[PTR_LEN];
     double chi = rq->si_psd ? ljgap_units_chi(&rq->mat) : 1, kt;
-    int k = v ? pick(e, v, "/vary", names, "field to vary", "\"m0\", \"C\", \"D\" or \"k1\"") : -1;
+    int k =
+        v ? pick(e, v, "/vary", names, "field to vary", "\"m0\", \"C\", \"D\", \"k1\" or \"k2\"")
+          : -1;
     int vary_ok = k >= 0;
     if (rq->psd.kind == LJGAP_PSD_TABLE)
         ljgap_verr_add(e, "/psd/kind", "a sweep varies a power-law PSD: kind must be \"power\"");
@@ -577,6 +588,13 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
                 !(kt < rq->psd.k2))
                 ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x,
                                rq->psd.k2 / chi);
+        } else if (rq->vary == LJGAP_VARY_K2) {
+            /* the unknown short-wavelength end: k2 in the PSD's units, above k1 */
+            if (num_pos(e, it, ptr, x) && isfinite(rq->psd.k1) && !(*x * chi > rq->psd.k1))
+                ljgap_verr_add(e, ptr, "k2 = %g must be above the PSD's k1 = %g", *x,
+                               rq->psd.k1 / chi);
+            else if (*x > 0)
+                in_core_range(e, ptr, "k2 (in units of 1/χ)", *x * chi, 0, LJGAP_K_MAX);
         } else {
             if (num_pos(e, it, ptr, x) && rq->vary == LJGAP_VARY_M0)
                 in_core_range(e, ptr, "m0 (in units of ε²)",
@@ -658,6 +676,8 @@ void ljgap_request_free(ljgap_request *rq)
     free(rq->psd.k);
     free(rq->psd.P);
     free(rq->psd.P_err);
+    free(rq->psd.P_corr);
+    rq->psd.P_corr = NULL;
     free(rq->x);
     free(rq->topo.h);
     rq->psd.k = rq->psd.P = rq->psd.P_err = rq->x = rq->topo.h = NULL;
@@ -695,6 +715,9 @@ void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec 
         break;
     case LJGAP_VARY_K1:
         spec->k1 = mat ? ljgap_units_k_to_dimless(mat, x) : x;
+        break;
+    case LJGAP_VARY_K2:
+        spec->k2 = mat ? ljgap_units_k_to_dimless(mat, x) : x;
         break;
     }
 }

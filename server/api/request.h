@@ -33,7 +33,7 @@ typedef enum {
 } ljgap_endpoint;
 
 /* Which PSD field a sweep varies. */
-typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1 } ljgap_vary;
+typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1, LJGAP_VARY_K2 } ljgap_vary;
 
 /* The psd object as given (not yet built: a sweep builds one PSD per value). */
 typedef struct {
@@ -48,8 +48,13 @@ typedef struct {
     int has_tail;       /* table: tail given */
     double tail_q;      /* table: tail exponent */
     double *P_err;      /* table: owned, n entries (1 σ of each P, in P's units: converted like
-                         * P), or NULL when not given; not used by the computation yet */
+                         * P), or NULL when not given; input_error.c propagates them */
     double tail_q_err;  /* table: the tail exponent's 1 σ (0 when not given) */
+    double *P_corr;     /* table: owned, n - 1 entries (correlation of the errors of knots i
+                         * and i + 1), or NULL when not given (independent) */
+    double D_err;       /* power: D's 1 σ (0 when not given) */
+    double level_err;   /* power: the level's 1 σ in the level's units (C_err, m0_err, h_rms_err;
+                         * converted like the level; 0 when not given) */
     int c_si;           /* power: level C is in SI (m^(2D-4)); converted with D and mat when
                          * the PSD is built (a sweep over D changes the conversion) */
     ljgap_material mat; /* the material, when c_si */
@@ -88,6 +93,8 @@ typedef struct {
     ljgap_material mat;    /* the material (SI), when has_material */
     int si_psd;            /* "units":"SI": the psd object was given in SI (now converted) */
     double R;              /* contact: sphere radius (m) */
+    int input_error;       /* answers carry the measurement's uncertainty (input_error,
+                            * extrapolated) when the PSD has one: 1 unless "input_error": false */
     ljgap_sim_opts sim;    /* simulation: n, L, realizations, seed, tol (the core's defaults
                             * for what is not given); g_ave points in x */
     ljgap_topo_spec topo;  /* psd: the height map */

@@ -18,8 +18,10 @@
 #define PTR_LEN 96 /* room for every pointer built from known names */
 #define PSD_TABLE_MAX 10000
 
-static const char *const power_fields[] = {"kind", "D", "H", "k1", "k2", "C", "m0", "h_rms", NULL};
-static const char *const table_fields[] = {"kind", "k", "P", "P_err", "tail", NULL};
+static const char *const power_fields[] = {"kind",   "D",         "H",     "k1",    "k2",
+                                           "C",      "m0",        "h_rms", "D_err", "C_err",
+                                           "m0_err", "h_rms_err", NULL};
+static const char *const table_fields[] = {"kind", "k", "P", "P_err", "P_corr", "tail", NULL};
 static const char *const tail_fields[] = {"exponent", "exponent_err", NULL};
 
 /* Level field of a power law: exactly one of C, m0, h_rms (in SI when mat is not NULL). */
@@ -61,6 +63,42 @@ static void parse_level(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
                        "h_rms (= √m0)");
 }
 
+/* A power law's optional errors (1 σ, >= 0): D_err, and the error of the level it was given by
+ * (C_err with C, m0_err with m0, h_rms_err with h_rms), converted like the level. */
+static void parse_power_errors(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
+                               ljgap_psd_spec *s)
+{
+    static const char *const names[] = {"C_err", "m0_err", "h_rms_err"};
+    static const char *const levels[] = {"C", "m0", "h_rms"};
+    const cJSON *it = ljgap_v_member(psd, "D_err");
+    if (it && ljgap_v_num(e, it, "/psd/D_err", &s->D_err) && !(s->D_err >= 0 && s->D_err < 1)) {
+        ljgap_verr_add(e, "/psd/D_err",
+                       "must be at least 0 and below 1 (D's standard error; got %g)", s->D_err);
+        s->D_err = 0;
+    }
+    for (int i = 0; i < 3; i++) {
+        char ptr[PTR_LEN];
+        if (!(it = ljgap_v_member(psd, names[i]))) continue;
+        snprintf(ptr, sizeof ptr, "/psd/%s", names[i]);
+        if (!ljgap_v_member(psd, levels[i])) {
+            ljgap_verr_add(e, ptr,
+                           "%s is the error of %s, which is not given: give the error of "
+                           "the level the PSD is set by",
+                           names[i], levels[i]);
+            continue;
+        }
+        if (!ljgap_v_num(e, it, ptr, &s->level_err)) continue;
+        if (!(s->level_err >= 0)) {
+            ljgap_verr_add(e, ptr, "must be at least 0 (a standard error; got %g)", s->level_err);
+            s->level_err = 0;
+        } else if (mat && i == 1) {
+            s->level_err = ljgap_units_var_to_dimless(mat, s->level_err);
+        } else if (mat && i == 2) {
+            s->level_err = ljgap_units_len_to_dimless(mat, s->level_err);
+        } /* C_err in SI is converted with C, when the PSD is built */
+    }
+}
+
 static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
                         ljgap_psd_spec *s)
 {
@@ -97,6 +135,7 @@ static void parse_power(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
                                   LJGAP_K_MAX);
     }
     parse_level(e, psd, mat, s);
+    parse_power_errors(e, psd, mat, s);
 }
 
 /* Numbers of a table column (pointer base) into a new array of n entries. */
@@ -120,7 +159,7 @@ static double *table_column(ljgap_verr *e, const cJSON *arr, const char *base, s
 }
 
 /* The table's optional P_err: one standard error per P, each finite and >= 0, converted like P
- * (the computation does not use them yet; a later step propagates them). */
+ * (server/uncert/input_error.c propagates them into the answers' input_error). */
 static void parse_table_errors(ljgap_verr *e, const cJSON *psd, const ljgap_material *mat,
                                size_t nP, ljgap_psd_spec *s)
 {
@@ -147,6 +186,44 @@ static void parse_table_errors(ljgap_verr *e, const cJSON *psd, const ljgap_mate
             ljgap_verr_add(e, ptr, "must be at least 0 (a standard error; got %g)", s->P_err[i]);
         else if (mat)
             s->P_err[i] = ljgap_units_P_to_dimless(mat, s->P_err[i]);
+        i++;
+    }
+}
+
+/* The table's optional P_corr: the correlation of the errors of knots i and i + 1 (n - 1 entries,
+ * each in [-1, 1]); it qualifies P_err, which must be given. */
+static void parse_table_corr(ljgap_verr *e, const cJSON *psd, size_t nP, ljgap_psd_spec *s)
+{
+    const cJSON *pc = ljgap_v_member(psd, "P_corr"), *it;
+    char ptr[PTR_LEN];
+    size_t i = 0, nc;
+    if (!pc) return;
+    if (!ljgap_v_member(psd, "P_err")) {
+        ljgap_verr_add(e, "/psd/P_corr", "the correlations of the knots' errors need P_err");
+        return;
+    }
+    nc = ljgap_v_array_of(e, pc, "/psd/P_corr", 1, PSD_TABLE_MAX - 1,
+                          "the correlations of neighbouring knots' errors");
+    if (nc == 0) return;
+    if (nP > 0 && nc != nP - 1) {
+        ljgap_verr_add(e, "/psd/P_corr",
+                       "has %zu entries but P has %zu: give one correlation per pair of "
+                       "neighbouring knots (%zu)",
+                       nc, nP, nP - 1);
+        return;
+    }
+    if (!(s->P_corr = malloc(nc * sizeof *s->P_corr))) {
+        e->oom = 1;
+        return;
+    }
+    cJSON_ArrayForEach(it, pc)
+    {
+        snprintf(ptr, sizeof ptr, "/psd/P_corr/%zu", i);
+        s->P_corr[i] = 0;
+        if (ljgap_v_num(e, it, ptr, &s->P_corr[i]) && !(fabs(s->P_corr[i]) <= 1)) {
+            ljgap_verr_add(e, ptr, "a correlation lies in [-1, 1] (got %g)", s->P_corr[i]);
+            s->P_corr[i] = 0;
+        }
         i++;
     }
 }
@@ -187,6 +264,7 @@ static void parse_table(ljgap_verr *e, const cJSON *psd, const ljgap_material *m
                            s->k[0], ljgap_k0(), ljgap_v_k0_why());
     }
     parse_table_errors(e, psd, mat, nP, s);
+    parse_table_corr(e, psd, nP, s);
     tail = ljgap_v_member(psd, "tail");
     if (tail && !cJSON_IsObject(tail)) {
         ljgap_verr_add(e, "/psd/tail", "must be an object {\"exponent\": q}");

@@ -70,6 +70,10 @@ def main():
     if endpoint in ("traction", "simulations"):
         want = {h: ans[h] for h in head if h in ans}
         want["sigma_err"] = ans["error"]["sigma"]
+        if "input_error" in ans:  # the measurement's uncertainty (issue 29)
+            want["sigma_input_err"] = ans["input_error"]["sigma"]
+            if "si" in ans:
+                want["sigma_Pa_input_err"] = ans["si"]["input_error"]["sigma_Pa"]
         if "si" in ans:
             want["g_ave_m"], want["sigma_Pa"] = ans["si"]["g_ave_m"], ans["si"]["sigma_Pa"]
             if "error" in ans["si"]:
@@ -77,10 +81,10 @@ def main():
     elif endpoint == "sweep":
         want["values"] = ans["values"]
         for h in head[1:]:
-            name = h[:-4] if h.endswith("_err") else h
+            kind = "input_error" if h.endswith("_input_err") else "error" if h.endswith("_err") else None
+            name = h[:-10] if kind == "input_error" else h[:-4] if kind else h
             src = ans["si"]["results"] if name.endswith(("_m", "_Pa", "_J_m2", "_m2")) else ans["results"]
-            want[h] = [None if r is None else r["error"][name] if h.endswith("_err") else r[name]
-                       for r in src]
+            want[h] = [None if r is None else r[kind][name] if kind else r[name] for r in src]
     elif endpoint == "pdf":
         for key in ("k2", "g", "phi"):
             want[key] = []

@@ -29,14 +29,19 @@ declare -A body=(
     [pdf]="{$PSD,\"g_ave\":0.98,\"k2\":[5,null],\"grid\":{\"min\":0.6,\"max\":1.6,\"n\":21},$MAT}"
     [sweep]="{$PSD,\"vary\":\"D\",\"values\":[2.3,2.5,2.7],$MAT}"
 )
-for e in traction pdf sweep; do
-    post "$e" "${body[$e]}"
+# with the measurement's uncertainty (issue 29): input_error columns and # lines
+PSDE='"psd":{"kind":"power","D":2.5,"k1":1,"m0":0.5,"D_err":0.02,"m0_err":0.02}'
+body[traction-ie]="{$PSDE,\"g_ave\":{\"min\":1.5,\"max\":5,\"n\":12},$MAT}"
+body[pdf-ie]="{$PSDE,\"g_ave\":0.98,\"k2\":[5,null],\"grid\":{\"min\":0.6,\"max\":1.6,\"n\":21},$MAT}"
+body[sweep-ie]="{$PSDE,\"vary\":\"k2\",\"values\":[5,50],$MAT}"
+for e in traction pdf sweep traction-ie pdf-ie sweep-ie; do
+    post "${e%-ie}" "${body[$e]}"
     cp "$tmp/body" "$tmp/$e.json"
-    post "$e" "${body[$e]}" -H 'Accept: text/csv'
+    post "${e%-ie}" "${body[$e]}" -H 'Accept: text/csv'
     cp "$tmp/body" "$tmp/$e.csv"
-    check "POST /v1/$e with Accept: text/csv: 200 text/csv; charset=utf-8; header=present" \
+    check "POST /v1/${e%-ie} ($e) with Accept: text/csv: 200 text/csv; charset=utf-8; header=present" \
         eval '[ "$STATUS" = 200 ] && [ "$(hdr Content-Type)" = "text/csv; charset=utf-8; header=present" ]'
-    out=$("$PY" tests/csv/compare.py "$e" "$tmp/$e.json" "$tmp/$e.csv" 2>&1)
+    out=$("$PY" tests/csv/compare.py "${e%-ie}" "$tmp/$e.json" "$tmp/$e.csv" 2>&1)
     rc=$?
     check "$e: the CSV parses and equals the JSON numbers ($(echo "$out" | tail -n 1))" \
         eval '[ "$rc" = 0 ]'
@@ -55,6 +60,17 @@ check "pdf CSV: each PDF's sigma_Pa with its error, and its phi_l1 (si.error.pdf
 check "sweep CSV: an error column beside each SI value (si.results[i].error)" grep -q \
     ',g_eq_m \[m\],g_eq_m_err \[m\],sigma_max_Pa \[Pa\],sigma_max_Pa_err \[Pa\],g_at_max_m \[m\],g_at_max_m_err \[m\],dgamma_eff_J_m2 \[J/m^2\],dgamma_eff_J_m2_err \[J/m^2\],m0_m2 \[m^2\]$' \
     "$tmp/sweep.csv"
+
+check "traction CSV with input_error: its columns beside the errors" \
+    grep -qx 'g_ave \[eps\],sigma \[sigma0\],sigma_err \[sigma0\],sigma_input_err \[sigma0\],g_ave_m \[m\],sigma_Pa \[Pa\],sigma_Pa_err \[Pa\],sigma_Pa_input_err \[Pa\]' \
+    "$tmp/traction-ie.csv"
+check "traction CSV with input_error: the summary's as # lines, meta.input_error.method" eval 'grep -q \
+    "^# input_error.summary.dgamma_eff \[dgamma\] = [0-9]" "$tmp/traction-ie.csv" &&
+    grep -q "^# meta.input_error.method = linear$" "$tmp/traction-ie.csv"'
+check "pdf CSV with input_error: each PDF's sigma" \
+    grep -q "^# input_error.pdfs\[1\].sigma \[sigma0\] = [0-9]" "$tmp/pdf-ie.csv"
+check "sweep CSV with input_error: NAME_input_err after NAME_err, values of k2 in 1/chi" grep -q \
+    '^values \[1/chi\],g_eq \[eps\],g_eq_err \[eps\],g_eq_input_err \[eps\],sigma_max' "$tmp/sweep-ie.csv"
 
 # ---- negotiation ----
 TR="{$PSD,\"g_ave\":[2,3]}"

@@ -200,7 +200,14 @@ static const rule rules[] = {
     /* sweep */
     {"sweep_needs_power_law", "sweep",
      "{'psd':{'kind':'table','k':[1,2],'P':[1,1]},'vary':'m0','values':[0.1]}", "/psd/kind"},
-    {"sweep_vary_unknown", "sweep", WITH("'vary':'k2','values':[3]"), "/vary"},
+    {"sweep_vary_unknown", "sweep", WITH("'vary':'k3','values':[3]"), "/vary"},
+    {"sweep_k2_at_k1", "sweep", WITH_INF("'vary':'k2','values':[1]"), "/values/0"},
+    /* the measurement's uncertainty (issue 29; tests/unit/test_uncert.c has the rest) */
+    {"input_error_not_bool", "adhesion", WITH("'input_error':'yes'"), "/input_error"},
+    {"power_h_rms_err_without_h_rms", "adhesion", POWER("'D':2.5,'k1':1,'m0':0.5,'h_rms_err':0.1"),
+     "/psd/h_rms_err"},
+    {"table_P_corr_not_array", "adhesion", TABLE("'k':[1,2],'P':[1,1],'P_err':[0,0],'P_corr':0.5"),
+     "/psd/P_corr"},
     {"sweep_D_outside", "sweep", WITH("'vary':'D','values':[2.2,2.5,3.1]"), "/values/2"},
     {"sweep_k1_below_k0", "sweep", WITH("'vary':'k1','values':[2,0.3]"), "/values/1"},
     {"sweep_m0_zero", "sweep", WITH("'vary':'m0','values':[0.1,0]"), "/values/1"},

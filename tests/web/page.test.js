@@ -298,6 +298,34 @@ test("table PSD uploaded as CSV: traction drawn, table and tail in the PSD plot;
   await page.check('input[name="kind"][value="power"]');
 });
 
+test("issue 29: a table with P_err: the traction's uncertainty band and Δγeff ± measurement ± solver", async () => {
+  await page.click('[data-preset="fig4"]');
+  await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
+  await page.check('input[name="kind"][value="table"]');
+  const C = 0.0795775;
+  const upload = async (withErr) => {
+    const rows = [1, 2, 4, 8, 16].map((k) => `${k},${C * Math.pow(k, -3)}${withErr ? `,${0.1 * C * Math.pow(k, -3)}` : ""}`);
+    await page.setInputFiles("#table-file", { name: "psd.csv", mimeType: "text/csv", buffer: Buffer.from(`k,P${withErr ? ",P_err" : ""}\n${rows.join("\n")}\n`) });
+    await page.waitForFunction((h) => document.getElementById("table").value.startsWith(h), withErr ? "k,P,P_err" : "k,P\n");
+    await page.fill("#tail", "-3");
+    assert.match(await runAndWait("#compute"), /^Done: 1 request/);
+  };
+  await upload(true);
+  assert.match(await page.textContent("#readout-traction caption"),
+    /^Δγeff\/Δγ = 0\.\d+ ± 0\.\d+ \(measurement\) ± \d\.\de-\d+ \(solver\)$/);
+  const fig = await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")));
+  assert.equal(fig.bands.length, 1, "one uncertainty band");
+  const hi = fig.series[fig.bands[0].hi].y, lo = fig.series[fig.bands[0].lo].y, mid = fig.series[0].y;
+  assert.ok(hi.every((v, i) => v === null || (v > mid[i] && lo[i] < mid[i])), "the band brackets the curve");
+  assert.ok(hi.some((v) => v !== null), "the band has points");
+  assert.match(await page.textContent("#readout-traction"), /orange band: ± the measurement's uncertainty/);
+  // the same table without P_err: no band, no line
+  await upload(false);
+  assert.equal(await page.$("#readout-traction caption"), null);
+  assert.equal((await page.evaluate(() => LJPlots.figure(document.getElementById("plot-traction")))).bands.length, 0);
+  await page.check('input[name="kind"][value="power"]');
+});
+
 test("material and sphere radius: SI values and the contact panel", async () => {
   await page.click('[data-preset="fig4"]');
   await page.waitForFunction(() => document.getElementById("busy").hidden && /^Done/.test(document.getElementById("status-text").textContent));
@@ -596,6 +624,8 @@ test("issue 30: a height map through \"Use this spectrum\" to traction, PDF and 
   assert.equal(body.material.E_star, 1e11);
   assert.equal(body.psd.kind, "table");
   assert.equal(body.psd.P_err.length, body.psd.k.length, "the psd object's errors go along");
+  assert.equal(body.psd.P_corr.length, body.psd.k.length - 1, "and the knots' correlations (issue 29)");
+  assert.match(await page.textContent("#readout-traction caption"), /\(measurement\) ± .* \(solver\)$/);
   const topo = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
   assert.equal(body.psd.k[0], Number(await page.inputValue("#topo-k1")));
   assert.ok(body.psd.k.length > 3 && topo.answers[0].psd.k.includes(body.psd.k[1]));
