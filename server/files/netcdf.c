@@ -51,6 +51,7 @@ typedef struct {
     uint64_t dimlen[MAX_DIMS]; /* their lengths (0: the record dimension) */
     char dimname[MAX_DIMS][8]; /* their names (first 7 bytes) */
     nc_att json;        /* the global attribute json */
+    uint64_t data_end;  /* the end of the last fixed-size variable's data */
     nc_var heights, x, y, mask; /* the variables read */
 } nc_file;
 
@@ -194,16 +195,21 @@ static long rd_header(nc_file *f)
         uint64_t nd = rd_n(f);
         if (nd > MAX_DIMS) return (long)f->b.pos;
         v->ndims = (int)nd;
+        uint64_t count = 1; /* values, saturating; 0 for a record variable */
         for (uint64_t d = 0; d < nd && !f->b.bad; d++) {
             uint64_t id = rd_n(f);
             if (id >= f->ndims) return (long)f->b.pos - 4;
             if (d < 2) v->dimid[d] = id;
+            uint64_t l = f->dimlen[id];
+            count = l == 0 ? 0 : count > UINT64_MAX / 16 / l ? UINT64_MAX / 16 : count * l;
         }
         if (rd_atts(f, v, NULL)) return f->b.bad ? (long)f->b.where : (long)f->b.pos;
         v->type = (int)ljgap_bytes_u32(&f->b, 1);
         if (!type_size(v->type) && !f->b.bad) return (long)f->b.pos - 4;
         (void)rd_n(f); /* vsize */
         v->begin = f->version == 1 ? ljgap_bytes_u32(&f->b, 1) : ljgap_bytes_u64(&f->b, 1);
+        uint64_t end = v->begin + count * type_size(v->type);
+        if (count && v->begin <= UINT64_MAX / 2 && end > f->data_end) f->data_end = end;
     }
     return f->b.bad ? (long)f->b.where : -1;
 }
@@ -287,6 +293,12 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel,
         goto done;
     }
     f->b.bad = 0;
+    if (f->data_end > len) {
+        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
+                           "the file is cut short at byte %zu: its variables reach byte %llu",
+                           len, (unsigned long long)f->data_end);
+        goto done;
+    }
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "heights");
     map->n_channels = 1;
     if (ljgap_fb_channel(map, channel, 0) != 0) {
