@@ -227,7 +227,14 @@ static const char *json_text(const char *js, const char *from, const char *key, 
     while (*p == ' ' || *p == ':') p++;
     size_t k = 0;
     if (*p == '"') {
-        for (p++; *p && *p != '"' && k + 1 < size; p++) out[k++] = *p;
+        for (p++; *p && *p != '"'; p++) {
+            char c = *p;
+            if (c == '\\' && p[1]) { /* an escape: \" \\ \/ kept, others a blank */
+                c = strchr("\"\\/", p[1]) ? p[1] : ' ';
+                p += p[1] == 'u' && p[2] && p[3] && p[4] && p[5] ? 5 : 1;
+            }
+            if (k + 1 < size) out[k++] = c;
+        }
     } else {
         for (; *p && (strchr("+-.eE", *p) || (*p >= '0' && *p <= '9')) && k + 1 < size; p++)
             out[k++] = *p;
@@ -286,6 +293,7 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel,
     }
     f->version = buf[3];
     long bad = rd_header(f);
+    if (bad > (long)len) bad = (long)len; /* a padding skipped past the end */
     if (bad >= 0) {
         rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, bad, NULL,
                            "the netCDF header is %s at byte %ld",
