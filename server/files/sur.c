@@ -13,9 +13,11 @@
  * each), inversion 290, the date (seconds, minutes, hours, day, month, year: u16 from 306),
  * the compressed data size 324 (u32), comment size 334, private size 336, z offset 474 (float).
  *
- * Each object is a channel titled by its object name. What is not read: Macintosh byte order
- * (format 257), the mirror flips of the inversion field (only "inverted z" is applied), the
- * x and y offsets, and objects other than height maps (series, spectra): they are read as maps.
+ * The inversion field (290): 1 inverts z, 2 also mirrors x, 3 also mirrors y (the way Gwyddion
+ * reads them; Gwyddion reflects z about the mean where this negates it: the same map up to a
+ * constant). Each object is a channel titled by its object name. What is not read: Macintosh
+ * byte order (format 257), the x and y offsets, and objects other than height maps (series,
+ * spectra): they are read as maps.
  */
 #include <stdint.h>
 #include <zlib.h>
@@ -226,7 +228,7 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel,
     double fz = ljgap_fb_length_unit(o->uz), fx = ljgap_fb_length_unit(o->ux),
            fy = ljgap_fb_length_unit(o->uy);
     if (fz == 0) fz = 1; /* not a length: the values in the stated unit */
-    double sign = o->inversion == 1 ? -1 : 1;
+    double sign = o->inversion >= 1 && o->inversion <= 3 ? -1 : 1;
     int64_t hole = (int64_t)o->zmin - 2;
     for (size_t k = 0; k < n; k++) {
         int64_t v = w == 2 ? (int16_t)(p[2 * k] | p[2 * k + 1] << 8)
@@ -238,6 +240,18 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel,
             ljgap_fb_put(map, k, sign * ((double)v * o->dz + o->zoff) * fz);
     }
     free(raw);
+    /* inversion 2 and 3 also mirror the map (as Gwyddion reads them): x, then y */
+    for (size_t j = 0; o->inversion == 2 && j < o->ny; j++)
+        for (size_t i = 0, r = j * o->nx; i < o->nx / 2; i++) {
+            double t = map->z[r + i];
+            map->z[r + i] = map->z[r + o->nx - 1 - i], map->z[r + o->nx - 1 - i] = t;
+        }
+    for (size_t j = 0; o->inversion == 3 && j < o->ny / 2; j++)
+        for (size_t i = 0; i < o->nx; i++) {
+            double t = map->z[j * o->nx + i];
+            map->z[j * o->nx + i] = map->z[(o->ny - 1 - j) * o->nx + i];
+            map->z[(o->ny - 1 - j) * o->nx + i] = t;
+        }
     if (fx > 0 && fy > 0 && o->dx > 0 && o->dy > 0 && isfinite(o->dx) && isfinite(o->dy)) {
         map->size_x = fabs(o->dx) * fx * o->nx;
         map->size_y = fabs(o->dy) * fy * o->ny;

@@ -79,8 +79,9 @@ check() {
 
 for f in x3p_d x3p_d_nan x3p_f_nan_deflate x3p_i_valid x3p_l; do check $f.x3p x3p 0 mask; done
 for f in sur16 sur32_holes sur32_zones sur32_offset; do check $f.sur sur 0 min; done
+for f in sur16_inverted sur16_flip sur16_flop; do check $f.sur sur 0 min,offset; done
 check surz.sur sur   # DSCOMPRESSED: Gwyddion 2.62 does not read it
-for f in mp1 mp2_intensity mp3; do check $f.dat metropro 0 mask; done
+for f in mp1 mp2_intensity mp3 mp2_sign; do check $f.dat metropro 0 mask; done
 for f in nc_map nc_fill nc_mask nc_profile nc_cdf5_yx; do check $f.nc netcdf; done
 
 # MetroPro's intensity frame against Gwyddion's second channel

@@ -3,9 +3,12 @@
 gave (dump_b's JSON) against the generator's truth (gen_b.py, gen_nc.py) and, where given,
 against Gwyddion's reading (gwy_read_b.py's JSON of the .gwy file Gwyddion wrote).
 
-usage: compare_b.py OURS.json TRUTH.json [GWY.json GWY_CHANNEL [holes=mask|min]]
-  holes=mask: Gwyddion marks our missing points in its mask (X3P, MetroPro)
-  holes=min:  Gwyddion keeps the "no data" value, the smallest of the map (Digital Surf)
+usage: compare_b.py OURS.json TRUTH.json [GWY.json GWY_CHANNEL [HOLES[,offset]]]
+  HOLES mask: Gwyddion marks our missing points in its mask (X3P, MetroPro)
+  HOLES min:  Gwyddion keeps the "no data" value, the smallest of the map (Digital Surf)
+  offset:     Gwyddion's heights may differ from ours by one constant (an inverted .sur:
+              Gwyddion reflects z about the mean, ljgap negates it); the constant is taken
+              from the first point and every other point must agree with it
 Prints nothing and exits 0 when all agree; else one line a disagreement, exit 1.
 """
 import json
@@ -41,7 +44,8 @@ def main():
             bad.append("point %d: ours %r, truth %r" % (k, a, b))
     if len(sys.argv) > 3:
         g = json.load(open(sys.argv[3]))[sys.argv[4]]
-        holes = sys.argv[5] if len(sys.argv) > 5 else "mask"
+        opts = (sys.argv[5] if len(sys.argv) > 5 else "mask").split(",")
+        holes = opts[0]
         nx, ny = ours["nx"], ours["ny"]
         if (g["xres"], g["yres"]) != (nx, ny):
             bad.append("Gwyddion's grid %dx%d, ours %dx%d" % (g["xres"], g["yres"], nx, ny))
@@ -52,9 +56,13 @@ def main():
             if ours["z_unit"] in ("m",) and g["unit_z"] != "m":
                 bad.append("Gwyddion's z unit %r" % g["unit_z"])
             gmin = min(v for row in g["data"] for v in row)
+            shift = 0.0
+            if "offset" in opts:
+                k0 = next(k for k, v in enumerate(zs) if v is not None)
+                shift = zs[k0] - g["data"][k0 // nx][k0 % nx]
             for j in range(ny):
                 for i in range(nx):
-                    a, b = zs[j * nx + i], g["data"][j][i]
+                    a, b = zs[j * nx + i], g["data"][j][i] + shift
                     m = g.get("mask")
                     masked = m is not None and m[j][i] != 0
                     if a is None:

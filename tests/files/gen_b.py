@@ -106,7 +106,7 @@ def x3p(path, nx, ny, dtype, dx, dy, holes=(), zinc=1.0, zoff=0.0, valid_bits=Fa
 # ---- Digital Surf ----
 
 def sur(path, nx, ny, bits, dx, dy, dz, ux, uy, uz, zoff=0.0, holes=(), comment=b"",
-        private=b"", compressed=False, seed=2):
+        private=b"", compressed=False, inversion=0, seed=2):
     rng = random.Random(seed)
     lim = 30000 if bits == 16 else 5000000
     vals = [rng.randint(-lim, lim) for _ in range(nx * ny)]
@@ -119,8 +119,16 @@ def sur(path, nx, ny, bits, dx, dy, dz, ux, uy, uz, zoff=0.0, holes=(), comment=
     data = b"".join(struct.pack(code, v) for v in vals)
     f32 = lambda x: struct.unpack("<f", struct.pack("<f", x))[0]
     unit = {"nm": 1e-9, "um": 1e-6, "\xb5m": 1e-6, "mm": 1e-3, "m": 1.0}
-    z = [None if k in holes else (v * f32(dz) + f32(zoff)) * unit[uz] for k, v in
+    # inversion: 1 inverts z, 2 also mirrors x, 3 also mirrors y (Gwyddion's reading)
+    sign = -1 if inversion in (1, 2, 3) else 1
+    z = [None if k in holes else sign * (v * f32(dz) + f32(zoff)) * unit[uz] for k, v in
          enumerate(vals)]
+    rows = [z[r * nx:(r + 1) * nx] for r in range(ny)]
+    if inversion == 2:
+        rows = [r[::-1] for r in rows]
+    if inversion == 3:
+        rows = rows[::-1]
+    z = [v for r in rows for v in r]
     csize = 0
     if compressed:
         zipped = zlib.compress(data)
@@ -140,6 +148,7 @@ def sur(path, nx, ny, bits, dx, dy, dz, ux, uy, uz, zoff=0.0, holes=(), comment=
     for i, t in enumerate(["X", "Y", "Z", ux, uy, uz, ux, uy, uz]):
         s(132 + 16 * i, t, 16)
     struct.pack_into("<fff", h, 276, 1.0, 1.0, 1.0)
+    struct.pack_into("<H", h, 290, inversion)
     struct.pack_into("<HHHHHHH", h, 306, 9, 8, 7, 6, 5, 2023, 2)  # s, min, h, day, month, year
     struct.pack_into("<I", h, 324, csize)
     struct.pack_into("<HH", h, 334, len(comment), len(private))
@@ -152,7 +161,7 @@ def sur(path, nx, ny, bits, dx, dy, dz, ux, uy, uz, zoff=0.0, holes=(), comment=
 # ---- MetroPro ----
 
 def metropro(path, fmt, nx, ny, phase_res, nbuckets=0, holes=(), wavelength=632.8e-9,
-             scale=0.5, obliquity=1.0, lateral=2.5e-7, seed=3):
+             scale=0.5, obliquity=1.0, lateral=2.5e-7, sign=0, seed=3):
     rng = random.Random(seed)
     hsize = 4096 if fmt == 3 else 834
     magic = {1: 0x881B036F, 2: 0x881B0370, 3: 0x881B0371}[fmt]
@@ -168,9 +177,10 @@ def metropro(path, fmt, nx, ny, phase_res, nbuckets=0, holes=(), wavelength=632.
     struct.pack_into(">hhHHIi", h, 64, 0, 0, nx, ny, 4 * nx * ny, 1700000000)
     struct.pack_into(">ffffff", h, 164, scale, wavelength, 0.3, obliquity, 50.0, lateral)
     struct.pack_into(">h", h, 218, phase_res)
+    struct.pack_into(">h", h, 232, sign)
     struct.pack_into(">hhh", h, 238, 5, 1, 1234)       # NewView, board, serial
     f32 = lambda x: struct.unpack(">f", struct.pack(">f", x))[0]
-    q = f32(scale) * f32(obliquity) * f32(wavelength) / R
+    q = f32(scale) * f32(obliquity) * f32(wavelength) / R * (-1 if sign == 1 else 1)
     z = [None if v >= 2147483640 else v * q for v in phase]
     with open(path, "wb") as f:
         f.write(bytes(h))
@@ -206,6 +216,12 @@ def main():
                                              private=b"\x01\x02\x03\x04\x05\x06")),
             ("sur32_offset", 8, 9, 32, dict(dx=1.0, dy=2.0, dz=1e-4, ux="um", uy="um",
                                             uz="um", zoff=3.5)),
+            ("sur16_inverted", 10, 6, 16, dict(dx=1.0, dy=1.0, dz=1.0, ux="um", uy="um",
+                                               uz="nm", inversion=1, zoff=0.0)),
+            ("sur16_flip", 7, 5, 16, dict(dx=1.0, dy=1.0, dz=1.0, ux="um", uy="um",
+                                          uz="nm", inversion=2)),
+            ("sur16_flop", 6, 8, 16, dict(dx=1.0, dy=1.0, dz=1.0, ux="um", uy="um",
+                                          uz="nm", inversion=3)),
             ("surz", 15, 6, 32, dict(dx=0.1, dy=0.1, dz=1e-3, ux="mm", uy="mm", uz="um",
                                      compressed=True))]:
         z = sur(j(name + ".sur"), nx, ny, bits, **kw)
@@ -215,11 +231,12 @@ def main():
               ny * f32(kw["dy"]) * unit[kw["uy"]], kw["uz"].replace("\xb5", "\u00b5"),
               {"acquired": "2023-05-06T07:08:09", "instrument": "AFM"})
     # MetroPro
-    for name, fmt, nx, ny, res, nb, holes in [
-            ("mp1", 1, 20, 15, 0, 0, (7, 100, 299)),
-            ("mp2_intensity", 2, 12, 10, 1, 1, (0, 119)),
-            ("mp3", 3, 9, 16, 1, 0, (50,))]:
-        z, lat = metropro(j(name + ".dat"), fmt, nx, ny, res, nb, holes)
+    for name, fmt, nx, ny, res, nb, holes, sign in [
+            ("mp1", 1, 20, 15, 0, 0, (7, 100, 299), 0),
+            ("mp2_intensity", 2, 12, 10, 1, 1, (0, 119), 0),
+            ("mp3", 3, 9, 16, 1, 0, (50,), 0),
+            ("mp2_sign", 2, 8, 8, 1, 0, (9,), 1)]:
+        z, lat = metropro(j(name + ".dat"), fmt, nx, ny, res, nb, holes, sign=sign)
         truth(j(name + ".json"), nx, ny, z, nx * lat, ny * lat, "m",
               {"acquired": "2023-11-14T22:13:20Z", "instrument": "Zygo NewView, serial 1234"})
 
