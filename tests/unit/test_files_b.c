@@ -5,7 +5,8 @@
  *     stored values), the missing points (NaN, a valid-point bit, a "no data" value, a mask,
  *     a _FillValue), the metadata (instrument, date, units, periodic, tip radius), channels by
  *     index and title, an unknown channel (LJGAP_FILES_CHANNEL);
- *   - variants: .sur 16 and 32 bits, comment and private zones, DSCOMPRESSED, two objects;
+ *   - variants: .sur 16 and 32 bits, comment and private zones, DSCOMPRESSED, two objects,
+ *     the inversions;
  *     MetroPro formats 1 and 3, phase resolutions, the sign flag, an intensity frame; X3P
  *     stored and deflated members, float NaN and integer valid bits, a profile, an inline
  *     DataList; netCDF CDF-1 and CDF-2, (x, y) and (y, x), a profile, a mask variable;
@@ -286,6 +287,17 @@ static void test_sur_objects_and_errors(void **state)
     ljgap_files_err e;
     assert_int_equal(read_err(&ljgap_files_sur, &w, "third", &e), LJGAP_FILES_CHANNEL);
     assert_int_equal(read_err(&ljgap_files_sur, &w, "2", &e), LJGAP_FILES_CHANNEL);
+    /* inversion (290): 1 negates z, 2 also mirrors x, 3 also mirrors y */
+    for (unsigned inv = 1; inv <= 3; inv++) {
+        poke(&w, 290, inv, 2, 0);
+        assert_int_equal(read_ok(&ljgap_files_sur, &w, NULL, &m), 0);
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 5; i++) {
+                int si = inv == 2 ? 4 - i : i, sj = inv == 3 ? 3 - j : j;
+                assert_close(m.z[j * 5 + i], -va[sj * 5 + si] * 1e-9, 1e-24);
+            }
+        map_release(&m);
+    }
     poke(&w, 98, 8, 2, 0); /* 8 bits a point */
     assert_int_equal(read_err(&ljgap_files_sur, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 98);
