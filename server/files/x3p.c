@@ -213,7 +213,7 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
                                &dlen, X3P, err);
         if (rc) goto done;
         if (dlen / w < n * nl) {
-            rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, (long)dlen, link,
+            rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,
                                "%zu bytes of points, %zu x %zu x %zu values of %zu bytes "
                                "stated", dlen, nx, ny, nl, w);
             goto done;
@@ -222,7 +222,7 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
             rc = ljgap_zip_extract(buf, len, t2, n * nl / 8 + 1, &valid, &vlen, X3P, err);
             if (rc) goto done;
             if (vlen < (n * nl + 7) / 8) {
-                rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, (long)vlen, t2,
+                rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, t2,
                                    "%zu bytes of valid-point bits for %zu points", vlen, n * nl);
                 goto done;
             }

@@ -42,10 +42,11 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
                              "archive", cdsize, cdoff);
     size_t nlen = strlen(name), at = cdoff;
     for (unsigned e = 0; e < entries; e++) {
+        size_t entry = at; /* this entry's offset */
         ljgap_bytes_seek(&b, at);
         uint32_t sig = ljgap_bytes_u32(&b, 0);
         if (b.bad || sig != 0x02014b50)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)at, NULL,
+            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(at < len ? at : len), NULL,
                                  "zip central directory entry %u is damaged", e);
         ljgap_bytes_seek(&b, at + 8);
         unsigned flags = ljgap_bytes_u16(&b, 0), method = ljgap_bytes_u16(&b, 0);
@@ -65,14 +66,14 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
 
         /* the member */
         if (flags & 1)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)local, name,
+            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                  "the member is encrypted");
         if (method != 0 && method != 8)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)local, name,
+            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                  "compression method %u: only stored (0) and deflate (8) are "
                                  "read", method);
         if (usize > maxlen)
-            return ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, format, (long)local, name,
+            return ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, format, (long)entry, name,
                                  "the member has %u bytes, more than the %zu allowed", usize,
                                  maxlen);
         ljgap_bytes_seek(&b, local);
@@ -80,7 +81,8 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
         ljgap_bytes_seek(&b, (size_t)local + 26);
         unsigned lname = ljgap_bytes_u16(&b, 0), lextra = ljgap_bytes_u16(&b, 0);
         if (b.bad || sig != 0x04034b50)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)local, name,
+            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(local < len ? local : len),
+                                 name,
                                  "the member's local header is missing or damaged");
         size_t data = (size_t)local + 30 + lname + lextra;
         const unsigned char *src = ljgap_bytes_at(&b, data, csize);
@@ -93,7 +95,7 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
         if (method == 0) {
             if (csize != usize) {
                 free(dst);
-                return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)at, name,
+                return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                      "a stored member of %u bytes claims %u", csize, usize);
             }
             memcpy(dst, src, usize);
