@@ -209,8 +209,13 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
 
     char link[256];
     if (xml_text(doc, "Record3/DataLink/PointDataLink", link, sizeof link) && link[0]) {
-        rc = ljgap_zip_extract(buf, len, link, (size_t)LJGAP_FILES_MAX_POINTS * 8 * nl, &data,
-                               &dlen, X3P, err);
+        /* the whole member is inflated: all its layers within the limit of one map */
+        if (n * w > (size_t)LJGAP_FILES_MAX_POINTS * 8 / nl) {
+            rc = ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, X3P, -1, link,
+                               "%zu layers of %zu x %zu points exceed the limit", nl, nx, ny);
+            goto done;
+        }
+        rc = ljgap_zip_extract(buf, len, link, n * nl * w + 64, &data, &dlen, X3P, err);
         if (rc) goto done;
         if (dlen / w < n * nl) {
             rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,

@@ -570,7 +570,19 @@ static void test_x3p_profile_list_toobig(void **state)
     zip_write(&w, big, 1);
     ljgap_files_err e;
     assert_int_equal(read_err(&ljgap_files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
-    free(xml), free(w.p);
+    free(xml);
+    /* a deflated member far larger than the grid needs (a zip bomb) is not inflated */
+    xml = x3p_xml("SUR", 'D', 2, 2, 1, 1, 0,
+                  "<DataLink><PointDataLink>bindata/data.bin</PointDataLink></DataLink>");
+    unsigned char *zeros_ = calloc(100000, 1);
+    member bomb[2] = {{"main.xml", (unsigned char *)xml, strlen(xml), 0},
+                      {"bindata/data.bin", zeros_, 100000, 1}};
+    w.n = 0;
+    zip_write(&w, bomb, 2);
+    assert_true(w.n < 2000);
+    assert_int_equal(read_err(&ljgap_files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
+    assert_string_equal(e.member, "bindata/data.bin");
+    free(zeros_), free(xml), free(w.p);
 }
 
 /* ---- netCDF (classic) ---- */
