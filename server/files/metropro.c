@@ -36,12 +36,12 @@ static int mp_probe(const unsigned char *buf, size_t len)
     return magic_format(buf, len) != 0;
 }
 
-static const char *const system_types[] = {"",        "Mark IVxp", "Maxim 3D",   "Maxim NT",
-                                           "GPI-XP",  "NewView",   "Maxim GP",   "NewView/GP",
-                                           "Mark to GPI conversion"};
+static const char *const system_types[] = {"",         "Mark IVxp",  "Maxim 3D",
+                                           "Maxim NT", "GPI-XP",     "NewView",
+                                           "Maxim GP", "NewView/GP", "Mark to GPI conversion"};
 
-static int mp_read(const unsigned char *buf, size_t len, const char *channel,
-                   ljgap_files_map *map, ljgap_files_err *err)
+static int mp_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                   ljgap_files_err *err)
 {
     ljgap_fb_map_init(map, MP);
     ljgap_bytes b;
@@ -58,7 +58,8 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel,
     if (hformat != (unsigned)fmt || hsize != want)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, MP, 4, NULL,
                              "header format %u of %u bytes: the magic number says format %d "
-                             "of %u bytes", hformat, hsize, fmt, want);
+                             "of %u bytes",
+                             hformat, hsize, fmt, want);
     if (len < hsize)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, MP, (long)len, NULL,
                              "the %u-byte header is cut short at byte %zu", hsize, len);
@@ -91,15 +92,16 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel,
     uint64_t acwant = (uint64_t)acw * ach * nbuckets * 2;
     if (acbytes != acwant)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, MP, 60, NULL,
-                             "%u bytes of intensity data for %u frames of %u x %u points",
-                             acbytes, nbuckets, acw, ach);
+                             "%u bytes of intensity data for %u frames of %u x %u points", acbytes,
+                             nbuckets, acw, ach);
     if (cnbytes != (uint64_t)cnw * cnh * 4)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, MP, 72, NULL,
                              "%u bytes of phase data for %u x %u points", cnbytes, cnw, cnh);
     if ((uint64_t)hsize + acbytes + cnbytes > len)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, MP, (long)len, NULL,
                              "the data (%u + %u bytes after the header) are cut short at "
-                             "byte %zu", acbytes, cnbytes, len);
+                             "byte %zu",
+                             acbytes, cnbytes, len);
 
     /* channels: the height (when there is phase data), then the intensity frames */
     int has_phase = cnbytes > 0;
@@ -155,12 +157,13 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel,
     const char *sys = systype > 0 && systype < (int)(sizeof system_types / sizeof *system_types)
                           ? system_types[systype]
                           : "";
-    snprintf(map->instrument, sizeof map->instrument, "Zygo%s%s, serial %d", *sys ? " " : "",
-             sys, serial);
+    snprintf(map->instrument, sizeof map->instrument, "Zygo%s%s, serial %d", *sys ? " " : "", sys,
+             serial);
     if (stamp > 0) {
         time_t t = stamp;
         struct tm tm;
-        if (gmtime_r(&t, &tm)) strftime(map->acquired, sizeof map->acquired, "%Y-%m-%dT%H:%M:%SZ", &tm);
+        if (gmtime_r(&t, &tm))
+            strftime(map->acquired, sizeof map->acquired, "%Y-%m-%dT%H:%M:%SZ", &tm);
     }
     return 0;
 }

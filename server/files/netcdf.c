@@ -36,29 +36,28 @@ typedef struct {
 } nc_att;
 
 typedef struct {
-    int present;         /* the variable exists */
-    int ndims;           /* its dimensions (at most 2 are kept) */
-    uint64_t dimid[2];   /* their ids */
-    int type;            /* nc_type */
-    uint64_t begin;      /* data offset */
+    int present;       /* the variable exists */
+    int ndims;         /* its dimensions (at most 2 are kept) */
+    uint64_t dimid[2]; /* their ids */
+    int type;          /* nc_type */
+    uint64_t begin;    /* data offset */
     nc_att unit, length, periodic, fill, missing, scale, offset; /* attributes read */
 } nc_var;
 
 typedef struct {
-    ljgap_bytes b;      /* the cursor */
-    int version;        /* 1, 2 (64-bit offsets) or 5 (64-bit data) */
-    size_t ndims;       /* dimensions */
-    uint64_t dimlen[MAX_DIMS]; /* their lengths (0: the record dimension) */
-    char dimname[MAX_DIMS][8]; /* their names (first 7 bytes) */
-    nc_att json;        /* the global attribute json */
-    uint64_t data_end;  /* the end of the last fixed-size variable's data */
+    ljgap_bytes b;              /* the cursor */
+    int version;                /* 1, 2 (64-bit offsets) or 5 (64-bit data) */
+    size_t ndims;               /* dimensions */
+    uint64_t dimlen[MAX_DIMS];  /* their lengths (0: the record dimension) */
+    char dimname[MAX_DIMS][8];  /* their names (first 7 bytes) */
+    nc_att json;                /* the global attribute json */
+    uint64_t data_end;          /* the end of the last fixed-size variable's data */
     nc_var heights, x, y, mask; /* the variables read */
 } nc_file;
 
 static int nc_probe(const unsigned char *buf, size_t len)
 {
-    if (len >= 4 && !memcmp(buf, "CDF", 3) && (buf[3] == 1 || buf[3] == 2 || buf[3] == 5))
-        return 1;
+    if (len >= 4 && !memcmp(buf, "CDF", 3) && (buf[3] == 1 || buf[3] == 2 || buf[3] == 5)) return 1;
     return len >= 8 && !memcmp(buf, "\x89HDF\r\n\x1a\n", 8);
 }
 
@@ -99,17 +98,28 @@ static double value_at(ljgap_bytes *b, int t, size_t at)
 {
     if (ljgap_bytes_seek(b, at)) return 0;
     switch (t) {
-    case 1: return (int8_t)ljgap_bytes_u8(b);
-    case 2: return ljgap_bytes_u8(b);
-    case 3: return ljgap_bytes_i16(b, 1);
-    case 4: return ljgap_bytes_i32(b, 1);
-    case 5: return ljgap_bytes_f32(b, 1);
-    case 6: return ljgap_bytes_f64(b, 1);
-    case 7: return ljgap_bytes_u8(b);
-    case 8: return ljgap_bytes_u16(b, 1);
-    case 9: return ljgap_bytes_u32(b, 1);
-    case 10: return (double)(int64_t)ljgap_bytes_u64(b, 1);
-    case 11: return (double)ljgap_bytes_u64(b, 1);
+    case 1:
+        return (int8_t)ljgap_bytes_u8(b);
+    case 2:
+        return ljgap_bytes_u8(b);
+    case 3:
+        return ljgap_bytes_i16(b, 1);
+    case 4:
+        return ljgap_bytes_i32(b, 1);
+    case 5:
+        return ljgap_bytes_f32(b, 1);
+    case 6:
+        return ljgap_bytes_f64(b, 1);
+    case 7:
+        return ljgap_bytes_u8(b);
+    case 8:
+        return ljgap_bytes_u16(b, 1);
+    case 9:
+        return ljgap_bytes_u32(b, 1);
+    case 10:
+        return (double)(int64_t)ljgap_bytes_u64(b, 1);
+    case 11:
+        return (double)ljgap_bytes_u64(b, 1);
     }
     return 0;
 }
@@ -152,13 +162,20 @@ static int rd_atts(nc_file *f, nc_var *var, nc_att *json)
         rd_pad(f);
         if (json && !strcmp(name, "json")) *json = a;
         if (!var) continue;
-        if (!strcmp(name, "unit") || (!strcmp(name, "units") && !var->unit.type)) var->unit = a;
-        else if (!strcmp(name, "length")) var->length = a;
-        else if (!strcmp(name, "periodic")) var->periodic = a;
-        else if (!strcmp(name, "_FillValue")) var->fill = a;
-        else if (!strcmp(name, "missing_value")) var->missing = a;
-        else if (!strcmp(name, "scale_factor")) var->scale = a;
-        else if (!strcmp(name, "add_offset")) var->offset = a;
+        if (!strcmp(name, "unit") || (!strcmp(name, "units") && !var->unit.type))
+            var->unit = a;
+        else if (!strcmp(name, "length"))
+            var->length = a;
+        else if (!strcmp(name, "periodic"))
+            var->periodic = a;
+        else if (!strcmp(name, "_FillValue"))
+            var->fill = a;
+        else if (!strcmp(name, "missing_value"))
+            var->missing = a;
+        else if (!strcmp(name, "scale_factor"))
+            var->scale = a;
+        else if (!strcmp(name, "add_offset"))
+            var->offset = a;
     }
     return f->b.bad ? -1 : 0;
 }
@@ -224,7 +241,8 @@ static const char *json_text(const char *js, const char *from, const char *key, 
     out[0] = 0;
     if (!p) return NULL;
     p += strlen(pat);
-    while (*p == ' ' || *p == ':') p++;
+    while (*p == ' ' || *p == ':')
+        p++;
     size_t k = 0;
     if (*p == '"') {
         for (p++; *p && *p != '"'; p++) {
@@ -269,14 +287,23 @@ static void read_info(nc_file *f, ljgap_files_map *map)
 
 static double default_fill(int t)
 {
-    static const double fill[] = {0, -127, 0, -32767, -2147483647, 9.9692099683868690e+36f,
-                                  9.9692099683868690e+36, 255, 65535, 4294967295.0,
-                                  -9223372036854775806.0, 18446744073709551614.0};
+    static const double fill[] = {0,
+                                  -127,
+                                  0,
+                                  -32767,
+                                  -2147483647,
+                                  9.9692099683868690e+36f,
+                                  9.9692099683868690e+36,
+                                  255,
+                                  65535,
+                                  4294967295.0,
+                                  -9223372036854775806.0,
+                                  18446744073709551614.0};
     return t >= 1 && t <= 11 ? fill[t] : 0;
 }
 
-static int nc_read(const unsigned char *buf, size_t len, const char *channel,
-                   ljgap_files_map *map, ljgap_files_err *err)
+static int nc_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                   ljgap_files_err *err)
 {
     ljgap_fb_map_init(map, NC);
     if (len >= 8 && !memcmp(buf, "\x89HDF\r\n\x1a\n", 8))
@@ -303,8 +330,8 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel,
     f->b.bad = 0;
     if (f->data_end > len) {
         rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
-                           "the file is cut short at byte %zu: its variables reach byte %llu",
-                           len, (unsigned long long)f->data_end);
+                           "the file is cut short at byte %zu: its variables reach byte %llu", len,
+                           (unsigned long long)f->data_end);
         goto done;
     }
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "heights");
@@ -348,8 +375,8 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel,
     size_t n = nx * ny, sz = type_size(h->type);
     if (h->begin > len || n > (len - h->begin) / sz) {
         rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
-                           "the heights (%zu values from byte %llu) are cut short at byte %zu",
-                           n, (unsigned long long)h->begin, len);
+                           "the heights (%zu values from byte %llu) are cut short at byte %zu", n,
+                           (unsigned long long)h->begin, len);
         goto done;
     }
     int has_mask = f->mask.present && f->mask.ndims == h->ndims &&

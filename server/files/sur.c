@@ -29,28 +29,36 @@
 #define HDR 512
 
 typedef struct {
-    size_t at;          /* the header's offset */
-    int compressed;     /* "DSCOMPRESSED" */
-    int type;           /* object type */
-    char name[31];      /* object name */
-    int acquisition;    /* acquisition type */
-    int nonmeasured;    /* points equal to zmin - 2 are missing */
-    int bits;           /* 16 or 32 */
-    int32_t zmin;       /* smallest value */
-    uint32_t nx, ny;    /* points a row, rows */
-    double dx, dy, dz;  /* steps in their units */
+    size_t at;                   /* the header's offset */
+    int compressed;              /* "DSCOMPRESSED" */
+    int type;                    /* object type */
+    char name[31];               /* object name */
+    int acquisition;             /* acquisition type */
+    int nonmeasured;             /* points equal to zmin - 2 are missing */
+    int bits;                    /* 16 or 32 */
+    int32_t zmin;                /* smallest value */
+    uint32_t nx, ny;             /* points a row, rows */
+    double dx, dy, dz;           /* steps in their units */
     char ux[17], uy[17], uz[17]; /* the step units */
-    int inversion;      /* 1: z inverted */
-    unsigned date[6];   /* seconds, minutes, hours, day, month, year */
-    uint32_t csize;     /* compressed data size */
-    size_t data;        /* the offset of the points */
-    size_t end;         /* the offset after the object */
-    double zoff;        /* z offset in the dz unit */
+    int inversion;               /* 1: z inverted */
+    unsigned date[6];            /* seconds, minutes, hours, day, month, year */
+    uint32_t csize;              /* compressed data size */
+    size_t data;                 /* the offset of the points */
+    size_t end;                  /* the offset after the object */
+    double zoff;                 /* z offset in the dz unit */
 } sur_obj;
 
-static const char *const acq_names[] = {
-    "", "contact stylus", "scanning optical gauge", "thermocouple", "", "contact stylus with skid",
-    "AFM", "STM", "video", "interferometer", "structured light projection"};
+static const char *const acq_names[] = {"",
+                                        "contact stylus",
+                                        "scanning optical gauge",
+                                        "thermocouple",
+                                        "",
+                                        "contact stylus with skid",
+                                        "AFM",
+                                        "STM",
+                                        "video",
+                                        "interferometer",
+                                        "structured light projection"};
 
 static int sur_probe(const unsigned char *buf, size_t len)
 {
@@ -105,7 +113,8 @@ static int sur_header(ljgap_bytes *b, size_t at, sur_obj *o, ljgap_files_err *er
     ljgap_bytes_seek(b, at + 290);
     o->inversion = ljgap_bytes_u16(b, 0);
     ljgap_bytes_seek(b, at + 306);
-    for (int i = 0; i < 6; i++) o->date[i] = ljgap_bytes_u16(b, 0);
+    for (int i = 0; i < 6; i++)
+        o->date[i] = ljgap_bytes_u16(b, 0);
     ljgap_bytes_seek(b, at + 324);
     o->csize = ljgap_bytes_u32(b, 0);
     ljgap_bytes_seek(b, at + 334);
@@ -152,8 +161,8 @@ static int sur_inflate(ljgap_bytes *b, const sur_obj *o, unsigned char *out, siz
         uint32_t raw = ljgap_bytes_u32(b, 0), zipped = ljgap_bytes_u32(b, 0);
         if (b->bad || zipped > o->end - stream || raw > rawsize - done)
             return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)(o->data + 4 + d * 8), NULL,
-                                 "compressed stream %u (%u bytes, %u raw) does not fit", d,
-                                 zipped, raw);
+                                 "compressed stream %u (%u bytes, %u raw) does not fit", d, zipped,
+                                 raw);
         z_stream zs;
         memset(&zs, 0, sizeof zs);
         if (inflateInit(&zs) != Z_OK)
@@ -174,8 +183,8 @@ static int sur_inflate(ljgap_bytes *b, const sur_obj *o, unsigned char *out, siz
     return 0;
 }
 
-static int sur_read(const unsigned char *buf, size_t len, const char *channel,
-                    ljgap_files_map *map, ljgap_files_err *err)
+static int sur_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
 {
     ljgap_fb_map_init(map, SUR);
     ljgap_bytes b;
@@ -263,8 +272,8 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel,
     const unsigned *d = o->date;
     if (d[5] >= 1900 && d[5] <= 9999 && d[4] >= 1 && d[4] <= 12 && d[3] >= 1 && d[3] <= 31 &&
         d[2] < 24 && d[1] < 60 && d[0] < 61)
-        snprintf(map->acquired, sizeof map->acquired, "%04u-%02u-%02uT%02u:%02u:%02u",
-                 d[5] % 10000, d[4] % 100, d[3] % 100, d[2] % 100, d[1] % 100, d[0] % 100);
+        snprintf(map->acquired, sizeof map->acquired, "%04u-%02u-%02uT%02u:%02u:%02u", d[5] % 10000,
+                 d[4] % 100, d[3] % 100, d[2] % 100, d[1] % 100, d[0] % 100);
     return 0;
 }
 

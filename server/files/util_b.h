@@ -18,10 +18,10 @@
 /* Fills err (when given) and returns code: msg printf-style, offset -1 when none applies,
  * member NULL when the file is not a container. */
 static inline int ljgap_fb_fail(ljgap_files_err *err, int code, const char *format, long offset,
-                         const char *member, const char *fmt, ...)
+                                const char *member, const char *fmt, ...)
     __attribute__((format(printf, 6, 7)));
 static inline int ljgap_fb_fail(ljgap_files_err *err, int code, const char *format, long offset,
-                         const char *member, const char *fmt, ...)
+                                const char *member, const char *fmt, ...)
 {
     if (!err) return code;
     va_list ap;
@@ -44,7 +44,7 @@ static inline void ljgap_fb_map_init(ljgap_files_map *map, const char *format)
 /* Allocates map->z for nx * ny points: LJGAP_FILES_BAD for an empty grid, TOOBIG past the
  * limit, NOMEM. */
 static inline int ljgap_fb_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err,
-                          const char *format, long offset)
+                                 const char *format, long offset)
 {
     if (nx == 0 || ny == 0)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, offset, NULL,
@@ -54,8 +54,7 @@ static inline int ljgap_fb_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljg
                              "%zu x %zu points exceed the limit of %u", nx, ny,
                              (unsigned)LJGAP_FILES_MAX_POINTS);
     map->z = malloc(nx * ny * sizeof *map->z);
-    if (!map->z)
-        return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, NULL, "out of memory");
+    if (!map->z) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, NULL, "out of memory");
     map->nx = nx, map->ny = ny;
     return 0;
 }
@@ -88,18 +87,21 @@ static inline double ljgap_fb_length_unit(const char *unit)
 {
     char u[32];
     size_t n = 0;
-    while (*unit == ' ' || *unit == '\t') unit++;
-    while (unit[n] && n < sizeof u - 1) u[n] = unit[n], n++;
-    while (n && (u[n - 1] == ' ' || u[n - 1] == '\t')) n--;
+    while (*unit == ' ' || *unit == '\t')
+        unit++;
+    while (unit[n] && n < sizeof u - 1)
+        u[n] = unit[n], n++;
+    while (n && (u[n - 1] == ' ' || u[n - 1] == '\t'))
+        n--;
     u[n] = 0;
     static const struct {
         const char *name;
         double f;
-    } units[] = {{"m", 1},        {"mm", 1e-3},         {"um", 1e-6},         {"\xc2\xb5m", 1e-6},
-                 {"\xb5m", 1e-6}, {"\xce\xbcm", 1e-6},  {"micron", 1e-6},     {"microns", 1e-6},
-                 {"nm", 1e-9},    {"pm", 1e-12},        {"A", 1e-10},         {"\xc3\x85", 1e-10},
-                 {"\xc5", 1e-10}, {"km", 1e3},          {"cm", 1e-2},         {"dm", 1e-1},
-                 {"meter", 1},    {"meters", 1},        {"metre", 1},         {"metres", 1}};
+    } units[] = {{"m", 1},        {"mm", 1e-3},        {"um", 1e-6},     {"\xc2\xb5m", 1e-6},
+                 {"\xb5m", 1e-6}, {"\xce\xbcm", 1e-6}, {"micron", 1e-6}, {"microns", 1e-6},
+                 {"nm", 1e-9},    {"pm", 1e-12},       {"A", 1e-10},     {"\xc3\x85", 1e-10},
+                 {"\xc5", 1e-10}, {"km", 1e3},         {"cm", 1e-2},     {"dm", 1e-1},
+                 {"meter", 1},    {"meters", 1},       {"metre", 1},     {"metres", 1}};
     for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
         if (!strcmp(u, units[i].name)) return units[i].f;
     return 0;
@@ -121,10 +123,12 @@ static inline void ljgap_fb_text(const unsigned char *p, size_t n, char *out, si
             out[k++] = (char)(0xc0 | c >> 6), out[k++] = (char)(0x80 | (c & 0x3f));
         }
     }
-    while (k && out[k - 1] == ' ') k--;
+    while (k && out[k - 1] == ' ')
+        k--;
     out[k] = 0;
     size_t lead = 0;
-    while (out[lead] == ' ') lead++;
+    while (out[lead] == ' ')
+        lead++;
     if (lead) memmove(out, out + lead, k - lead + 1);
 }
 

@@ -46,14 +46,16 @@ static int xml_find(span in, const char *tag, span *out)
         if (in.s[i] != '<' || in.s[i + 1] == '/' || in.s[i + 1] == '?' || in.s[i + 1] == '!')
             continue;
         size_t a = i + 1, e = a;
-        while (e < in.n && !strchr(" \t\r\n/>", in.s[e])) e++;
+        while (e < in.n && !strchr(" \t\r\n/>", in.s[e]))
+            e++;
         size_t nl = e - a; /* the full name, prefix included */
         const char *nm = in.s + a;
         int match = nl == tl ? !memcmp(nm, tag, tl)
                              : nl > tl && nm[nl - tl - 1] == ':' && !memcmp(nm + nl - tl, tag, tl);
         if (!match) continue;
         size_t g = e;
-        while (g < in.n && in.s[g] != '>') g++;
+        while (g < in.n && in.s[g] != '>')
+            g++;
         if (g >= in.n) return 0;
         if (in.s[g - 1] == '/') {
             out->s = in.s + g + 1, out->n = 0;
@@ -85,8 +87,10 @@ static int xml_text(span doc, const char *path, char *out, size_t size)
         path += k + (path[k] == '/');
     }
     size_t a = 0, e = cur.n, o = 0;
-    while (a < e && strchr(" \t\r\n", cur.s[a])) a++;
-    while (e > a && strchr(" \t\r\n", cur.s[e - 1])) e--;
+    while (a < e && strchr(" \t\r\n", cur.s[a]))
+        a++;
+    while (e > a && strchr(" \t\r\n", cur.s[e - 1]))
+        e--;
     static const struct {
         const char *ent;
         char c;
@@ -123,8 +127,8 @@ static int x3p_fail(ljgap_files_err *err, const char *fmt, const char *what)
     return ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, "main.xml", fmt, what);
 }
 
-static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
-                    ljgap_files_map *map, ljgap_files_err *err)
+static int x3p_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
 {
     ljgap_fb_map_init(map, X3P);
     unsigned char *xml = NULL, *data = NULL, *valid = NULL;
@@ -151,8 +155,8 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
         snprintf(p, sizeof p, "%sAxisType", axes[a]);
         xml_text(doc, p, t, sizeof t);
         if (strcmp(t, "I")) {
-            rc = x3p_fail(err, "axis type \"%s\" for x or y: only incremental axes (I) are read",
-                          t);
+            rc =
+                x3p_fail(err, "axis type \"%s\" for x or y: only incremental axes (I) are read", t);
             goto done;
         }
         snprintf(p, sizeof p, "%sIncrement", axes[a]);
@@ -162,7 +166,11 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
         }
     }
     xml_text(doc, "Record1/Axes/CZ/DataType", t, sizeof t);
-    size_t w = !strcmp(t, "I") ? 2 : !strcmp(t, "L") ? 4 : !strcmp(t, "F") ? 4 : !strcmp(t, "D") ? 8 : 0;
+    size_t w = !strcmp(t, "I")   ? 2
+               : !strcmp(t, "L") ? 4
+               : !strcmp(t, "F") ? 4
+               : !strcmp(t, "D") ? 8
+                                 : 0;
     char dtype = t[0];
     if (!w || t[1]) {
         rc = x3p_fail(err, "z data type \"%s\": I, L, F or D are read", t);
@@ -184,11 +192,13 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
     }
     if (xml_num(doc, "Record3/MatrixDimension/SizeZ", &sz) < 0) sz = 0;
     if (profile && xml_num(doc, "Record3/MatrixDimension/SizeY", &sy) != 1) sy = 1;
-    if (!(sx >= 1 && sy >= 1 && sz >= 1 && sx == floor(sx) && sy == floor(sy) &&
-          sz == floor(sz) && sz <= LJGAP_FILES_MAX_CHANNELS && sx <= LJGAP_FILES_MAX_POINTS &&
+    if (!(sx >= 1 && sy >= 1 && sz >= 1 && sx == floor(sx) && sy == floor(sy) && sz == floor(sz) &&
+          sz <= LJGAP_FILES_MAX_CHANNELS && sx <= LJGAP_FILES_MAX_POINTS &&
           sy <= LJGAP_FILES_MAX_POINTS)) {
-        rc = x3p_fail(err, "%s: SizeX, SizeY and SizeZ must be whole numbers >= 1 (at most 32 "
-                           "layers)", "Record3/MatrixDimension");
+        rc = x3p_fail(err,
+                      "%s: SizeX, SizeY and SizeZ must be whole numbers >= 1 (at most 32 "
+                      "layers)",
+                      "Record3/MatrixDimension");
         goto done;
     }
     size_t nx = (size_t)sx, ny = (size_t)sy, nl = (size_t)sz;
@@ -220,7 +230,8 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
         if (dlen / w < n * nl) {
             rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,
                                "%zu bytes of points, %zu x %zu x %zu values of %zu bytes "
-                               "stated", dlen, nx, ny, nl, w);
+                               "stated",
+                               dlen, nx, ny, nl, w);
             goto done;
         }
         if (xml_text(doc, "Record3/DataLink/ValidPointsLink", t2, sizeof t2) && t2[0]) {
@@ -256,12 +267,15 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel,
             if (k >= first) {
                 char v[64], *end;
                 size_t a = 0, e = item.n;
-                while (a < e && strchr(" \t\r\n", item.s[a])) a++;
-                while (e > a && strchr(" \t\r\n", item.s[e - 1])) e--;
+                while (a < e && strchr(" \t\r\n", item.s[a]))
+                    a++;
+                while (e > a && strchr(" \t\r\n", item.s[e - 1]))
+                    e--;
                 if (e - a >= sizeof v) e = a + sizeof v - 1;
                 memcpy(v, item.s + a, e - a), v[e - a] = 0;
                 double d = strtod(v, &end);
-                if (end == v) d = NAN;
+                if (end == v)
+                    d = NAN;
                 else if (*end) {
                     rc = x3p_fail(err, "a Datum \"%s\" that is not a number", v);
                     goto done;

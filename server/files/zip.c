@@ -16,8 +16,7 @@
 #include "zip.h"
 
 int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, size_t maxlen,
-                      unsigned char **out, size_t *outlen, const char *format,
-                      ljgap_files_err *err)
+                      unsigned char **out, size_t *outlen, const char *format, ljgap_files_err *err)
 {
     *out = NULL, *outlen = 0;
     ljgap_bytes b;
@@ -39,7 +38,8 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
     if (b.bad || cdoff > eocd || cdsize > eocd - cdoff)
         return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)eocd, NULL,
                              "the zip central directory (%u bytes at %u) lies outside the "
-                             "archive", cdsize, cdoff);
+                             "archive",
+                             cdsize, cdoff);
     size_t nlen = strlen(name), at = cdoff;
     for (unsigned e = 0; e < entries; e++) {
         size_t entry = at; /* this entry's offset */
@@ -71,7 +71,8 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
         if (method != 0 && method != 8)
             return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                  "compression method %u: only stored (0) and deflate (8) are "
-                                 "read", method);
+                                 "read",
+                                 method);
         if (usize > maxlen)
             return ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, format, (long)entry, name,
                                  "the member has %u bytes, more than the %zu allowed", usize,
@@ -82,14 +83,12 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
         unsigned lname = ljgap_bytes_u16(&b, 0), lextra = ljgap_bytes_u16(&b, 0);
         if (b.bad || sig != 0x04034b50)
             return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(local < len ? local : len),
-                                 name,
-                                 "the member's local header is missing or damaged");
+                                 name, "the member's local header is missing or damaged");
         size_t data = (size_t)local + 30 + lname + lextra;
         const unsigned char *src = ljgap_bytes_at(&b, data, csize);
         if (!src)
             return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)len, name,
-                                 "the member (%u bytes from byte %zu) is cut short", csize,
-                                 data);
+                                 "the member (%u bytes from byte %zu) is cut short", csize, data);
         unsigned char *dst = malloc((size_t)usize + 1);
         if (!dst) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, name, "out of memory");
         if (method == 0) {
@@ -114,8 +113,7 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
             if (rc != Z_STREAM_END || got != usize) {
                 free(dst);
                 return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(data + used), name,
-                                     "the deflated member does not inflate to its %u bytes",
-                                     usize);
+                                     "the deflated member does not inflate to its %u bytes", usize);
             }
         }
         if (crc32(0L, dst, usize) != crc) {

@@ -57,7 +57,8 @@ static void put(wbuf *w, const void *src, size_t n)
 static void putu(wbuf *w, uint64_t v, size_t n, int be)
 {
     unsigned char b[8];
-    for (size_t i = 0; i < n; i++) b[be ? n - 1 - i : i] = (unsigned char)(v >> (8 * i));
+    for (size_t i = 0; i < n; i++)
+        b[be ? n - 1 - i : i] = (unsigned char)(v >> (8 * i));
     put(w, b, n);
 }
 
@@ -70,13 +71,15 @@ static void putf64(wbuf *w, double d, int be)
 
 static void zeros(wbuf *w, size_t n)
 {
-    while (n--) putu(w, 0, 1, 0);
+    while (n--)
+        putu(w, 0, 1, 0);
 }
 
 /* writes at a fixed offset (the buffer is at least that long) */
 static void poke(wbuf *w, size_t at, uint64_t v, size_t n, int be)
 {
-    for (size_t i = 0; i < n; i++) w->p[at + (be ? n - 1 - i : i)] = (unsigned char)(v >> (8 * i));
+    for (size_t i = 0; i < n; i++)
+        w->p[at + (be ? n - 1 - i : i)] = (unsigned char)(v >> (8 * i));
 }
 
 static void pokef32(wbuf *w, size_t at, float f, int be)
@@ -137,7 +140,8 @@ static void sweep(const ljgap_files_format *f, const wbuf *w)
         int rc = f->read(buf, w->n, NULL, &m, &e);
         if (rc == 0) {
             size_t nan = 0;
-            for (size_t k = 0; k < m.nx * m.ny; k++) nan += isnan(m.z[k]), assert_false(isinf(m.z[k]));
+            for (size_t k = 0; k < m.nx * m.ny; k++)
+                nan += isnan(m.z[k]), assert_false(isinf(m.z[k]));
             assert_int_equal(nan, m.missing);
             assert_true(isfinite(m.size_x) && isfinite(m.size_y));
         } else {
@@ -183,9 +187,11 @@ static void sur_object(wbuf *w, const sur_spec *s, int nobj, int32_t *vals)
 {
     size_t at = w->n, n = (size_t)s->nx * s->ny;
     int32_t lim = s->bits == 16 ? 30000 : 3000000, zmin = INT32_MAX;
-    for (size_t k = 0; k < n; k++) vals[k] = rnd(lim), zmin = vals[k] < zmin ? vals[k] : zmin;
+    for (size_t k = 0; k < n; k++)
+        vals[k] = rnd(lim), zmin = vals[k] < zmin ? vals[k] : zmin;
     if (s->holes)
-        for (size_t k = 3; k < n; k += 17) vals[k] = zmin - 2;
+        for (size_t k = 3; k < n; k += 17)
+            vals[k] = zmin - 2;
     zeros(w, 512);
     poketext(w, at, s->compressed ? "DSCOMPRESSED" : "DIGITAL SURF");
     poke(w, at + 14, (uint64_t)nobj, 2, 0);
@@ -200,12 +206,15 @@ static void sur_object(wbuf *w, const sur_spec *s, int nobj, int32_t *vals)
     pokef32(w, at + 120, s->dx, 0), pokef32(w, at + 124, s->dy, 0), pokef32(w, at + 128, s->dz, 0);
     poketext(w, at + 180, s->ux), poketext(w, at + 196, s->ux), poketext(w, at + 212, s->uz);
     unsigned date[7] = {9, 8, 7, 6, 5, 2023, 2};
-    for (int i = 0; i < 7; i++) poke(w, at + 306 + 2 * (size_t)i, date[i], 2, 0);
+    for (int i = 0; i < 7; i++)
+        poke(w, at + 306 + 2 * (size_t)i, date[i], 2, 0);
     poke(w, at + 334, s->comment, 2, 0), poke(w, at + 336, s->priv, 2, 0);
     pokef32(w, at + 474, s->zoff, 0);
-    for (size_t i = 0; i < s->comment + s->priv; i++) putu(w, 'c', 1, 0);
+    for (size_t i = 0; i < s->comment + s->priv; i++)
+        putu(w, 'c', 1, 0);
     wbuf raw = {0};
-    for (size_t k = 0; k < n; k++) putu(&raw, (uint32_t)vals[k], (size_t)s->bits / 8, 0);
+    for (size_t k = 0; k < n; k++)
+        putu(&raw, (uint32_t)vals[k], (size_t)s->bits / 8, 0);
     if (!s->compressed) {
         put(w, raw.p, raw.n);
     } else {
@@ -398,10 +407,10 @@ static void test_metropro(void **state)
 /* ---- X3P ---- */
 
 typedef struct {
-    const char *name;             /* member path */
-    const unsigned char *data;    /* its bytes */
-    size_t n;                     /* their count */
-    int deflate;                  /* stored or deflated */
+    const char *name;          /* member path */
+    const unsigned char *data; /* its bytes */
+    size_t n;                  /* their count */
+    int deflate;               /* stored or deflated */
 } member;
 
 static void zip_write(wbuf *w, const member *mem, int count)
@@ -498,7 +507,8 @@ static void test_x3p(void **state)
     assert_int_equal(m.n_channels, 2);
     map_release(&m);
     assert_int_equal(read_ok(&ljgap_files_x3p, &w, "1", &m), 0); /* the second layer */
-    for (int k = 0; k < N; k++) assert_true(isnan(d[N + k]) ? isnan(m.z[k]) : m.z[k] == d[N + k]);
+    for (int k = 0; k < N; k++)
+        assert_true(isnan(d[N + k]) ? isnan(m.z[k]) : m.z[k] == d[N + k]);
     map_release(&m);
     sweep(&ljgap_files_x3p, &w);
     ljgap_files_err e;
@@ -616,9 +626,10 @@ static void nc_file(wbuf *w, int version, int nx, int ny, int yx, const double *
     nc_name(w, "x"), putu(w, (uint64_t)nx, 4, 1);
     if (!prof) nc_name(w, "y"), putu(w, (uint64_t)ny, 4, 1);
     putu(w, 12, 4, 1), putu(w, 1, 4, 1);
-    nc_att_text(w, "json", "{\"acquisition_time\": \"2020-01-02T03:04:05\", \"instrument\": "
-                           "{\"name\": \"AFM \\\"X\", \"parameters\": {\"tip_radius\": "
-                           "{\"value\": 20.0, \"unit\": \"nm\"}}}}");
+    nc_att_text(w, "json",
+                "{\"acquisition_time\": \"2020-01-02T03:04:05\", \"instrument\": "
+                "{\"name\": \"AFM \\\"X\", \"parameters\": {\"tip_radius\": "
+                "{\"value\": 20.0, \"unit\": \"nm\"}}}}");
     putu(w, 11, 4, 1), putu(w, (uint64_t)nv, 4, 1);
     size_t begins[4];
     const char *names[4] = {"heights", "x", "y", "mask"};
@@ -657,10 +668,12 @@ static void nc_file(wbuf *w, int version, int nx, int ny, int yx, const double *
         putf64(w, h[i * (prof ? 1 : ny) + j], 1);
     }
     poke(w, begins[1], w->n, osz, 1);
-    for (int i = 0; i < nx; i++) putf64(w, i * 12.5 / nx, 1);
+    for (int i = 0; i < nx; i++)
+        putf64(w, i * 12.5 / nx, 1);
     if (!prof) {
         poke(w, begins[2], w->n, osz, 1);
-        for (int j = 0; j < ny; j++) putf64(w, j * 7.5 / ny, 1);
+        for (int j = 0; j < ny; j++)
+            putf64(w, j * 7.5 / ny, 1);
     }
     if (mask) {
         poke(w, begins[3], w->n, osz, 1);
@@ -677,7 +690,8 @@ static void check_nc(int version, int nx, int ny, int yx, int with_mask, int per
     int prof = ny == 0, rows = prof ? 1 : ny;
     double h[64];
     signed char mask[64] = {0};
-    for (int k = 0; k < nx * rows; k++) h[k] = rnd(100000) * 1e-5;
+    for (int k = 0; k < nx * rows; k++)
+        h[k] = rnd(100000) * 1e-5;
     h[3] = -9999.0; /* the fill value */
     h[5] = NAN;
     if (with_mask) mask[7] = 1, mask[8] = 1;
@@ -749,11 +763,13 @@ static void test_probes(void **state)
     double h[16] = {0};
     nc_file(&w[3], 1, 4, 4, 0, h, NULL, 0);
     for (int a = 0; a < 4; a++) {
-        for (int b = 0; b < 4; b++) assert_int_equal(f[a]->probe(w[b].p, w[b].n) != 0, a == b);
+        for (int b = 0; b < 4; b++)
+            assert_int_equal(f[a]->probe(w[b].p, w[b].n) != 0, a == b);
         assert_false(f[a]->probe(w[a].p, 2));
         assert_false(f[a]->probe((const unsigned char *)"hello world, no magic here", 26));
     }
-    for (int a = 0; a < 4; a++) free(w[a].p);
+    for (int a = 0; a < 4; a++)
+        free(w[a].p);
     free(xml);
 }
 
