@@ -322,6 +322,9 @@ static int read_v5(ljgap_bytes *b, wave *w, ljgap_files_err *err)
     /* the sections after the data, in order; each must be there in full */
     w->data = BIN5 + WAVE5;
     uint64_t at = (uint64_t)w->data + (wfm - WAVE5);
+    if (at > b->len)
+        return bad(err, (long)b->len, "the file ends inside the data (%u bytes from %zu)",
+                   wfm - WAVE5, w->data);
     uint64_t sizes[12] = {formula,       note,          data_eunits,   dim_eunits[0],
                           dim_eunits[1], dim_eunits[2], dim_eunits[3], dim_labels[0],
                           dim_labels[1], dim_labels[2], dim_labels[3], 0};
@@ -375,8 +378,8 @@ static int read_v2(ljgap_bytes *b, wave *w, ljgap_files_err *err)
     w->n[0] = npnts, w->n[1] = 1, w->n[2] = 1;
     w->data = bh + WAVE2;
     uint64_t at = (uint64_t)bh + wfm;
-    if (at + note > b->len)
-        return bad(err, (long)(at <= b->len ? b->len : at), "the file ends inside the note");
+    if (at > b->len) return bad(err, (long)b->len, "the file ends inside the data");
+    if (at + note > b->len) return bad(err, (long)b->len, "the file ends inside the note");
     if (note) w->note = b->buf + at, w->note_len = note;
     return 0;
 }

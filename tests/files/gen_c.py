@@ -5,6 +5,7 @@ Note 003, IgorBin.h), Park Systems TIFF (the TIFF 6.0 layout plus Park's private
 and its image header) and Sensofar PLu 2000 (its 500-byte header and float32 layers).
 
     /usr/bin/python3 tests/files/gen_c.py OUTDIR [SEED]
+    /usr/bin/python3 tests/files/gen_c.py --seeds tests/fuzz/files_corpus
 
 writes into OUTDIR: ibw_le.ibw (3 float32 layers, little endian, a NaN, Asylum's note),
 ibw_be.ibw (big endian, float64, 2 layers), ibw_i16.ibw (int16, one layer, nm, µm steps), park_v2.tiff (float32),
@@ -125,7 +126,28 @@ def plu(layers, *, mpp=(0.5, 0.75), mtype=3, hw=1, date="Tue Mar  5 14:03:09 202
     return out
 
 
+def seeds(out):
+    """Small seeds for the fuzzer (tests/fuzz/files_corpus): a valid file of each format and
+    the same file cut inside its data (the TIFF's directory comes last), each under 4 KiB."""
+    rng = np.random.default_rng(7)
+    note = "ScanSize: 8e-08\rMicroscopeModel: MFP3D\rDate: 2024-05-06\rTime: 10:00:00\r"
+    files = {
+        "ibw_valid.ibw": ibw5([rng.normal(0, 1e-9, (6, 8)), rng.normal(0, 1.0, (6, 8))],
+                              ["HeightRetrace", "PhaseRetrace"], note=note),
+        "tiff_park_valid.tiff": park(rng.normal(0, 0.01, (6, 8)), size=(1.0, 0.75)),
+        "plu_valid.plu": plu([rng.normal(0, 0.1, (6, 8))]),
+    }
+    for name, data in files.items():
+        inside = {"ibw": 484, "tiff": len(data) * 2 // 3, "plu": 600}[name.split("_")[0]]
+        for kind, cut in (("valid", len(data)), ("truncated", inside)):
+            with open(f"{out}/{name.replace('valid', kind)}", "wb") as f:
+                f.write(data[:cut])
+
+
 def main():
+    if sys.argv[1] == "--seeds":
+        seeds(sys.argv[2])
+        return
     out = sys.argv[1]
     rng = np.random.default_rng(int(sys.argv[2]) if len(sys.argv) > 2 else 28)
 

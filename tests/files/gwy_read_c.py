@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """gwy_read_c.py -- a small reader of Gwyddion's native .gwy files (what `gwyddion
 --convert-to-gwy` writes), written from Gwyddion's description of its serialization:
 
@@ -10,7 +10,7 @@
 A GwyContainer holds its items under keys such as "/0/data" (a GwyDataField: xres, yres, xreal,
 yreal, si_unit_xy and si_unit_z (GwySIUnit: unitstr), data), "/0/data/title" and "/0/mask".
 
-    /usr/bin/python3 tests/files/gwy_read_c.py FILE.gwy [ID]
+    python3 tests/files/gwy_read_c.py FILE.gwy [ID]
 
 prints channel ID (default 0): "xres yres xreal yreal unit_z title" on one line, then one line a
 point "value mask" (row 0 first; mask 1 where Gwyddion masked the point, else 0).
