@@ -36,7 +36,6 @@
  * the wave's creation date, seconds since 1904) and the tip radius (TipRadius, m) where written.
  * NaN heights (Igor's blanks) are missing points. Complex and text waves are refused.
  */
-#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -99,18 +98,17 @@ static int ibw_probe(const unsigned char *buf, size_t len)
     return checksum(buf, head, be) == 0 || (len >= head + 16 && checksum(buf, head + 16, be) == 0);
 }
 
-/* The factor to metres of a length unit ("m", "nm", "um", "µm" in UTF-8 or Latin-1, "Å"...),
- * 0 for anything else. */
+/* The factor to metres of a length unit ("m", "nm", "um", "µm", "Å"..., as text_copy gives
+ * them: UTF-8), 0 for anything else. */
 static double length_factor(const char *u)
 {
     static const struct {
         const char *unit;
         double f;
-    } units[] = {{"m", 1},           {"cm", 1e-2},        {"mm", 1e-3},
-                 {"um", 1e-6},       {"\xc2\xb5m", 1e-6}, {"\xb5m", 1e-6},
-                 {"micron", 1e-6},   {"nm", 1e-9},        {"pm", 1e-12},
-                 {"A", 1e-10},       {"\xc3\x85", 1e-10}, {"\xc5", 1e-10},
-                 {"Angstrom", 1e-10}};
+    } units[] = {{"m", 1},         {"cm", 1e-2},        {"mm", 1e-3},
+                 {"um", 1e-6},     {"\xc2\xb5m", 1e-6}, {"\xce\xbcm", 1e-6},
+                 {"micron", 1e-6}, {"nm", 1e-9},        {"pm", 1e-12},
+                 {"A", 1e-10},     {"\xc3\x85", 1e-10}, {"Angstrom", 1e-10}};
     for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
         if (!strcmp(u, units[i].unit)) return units[i].f;
     return 0;
@@ -143,15 +141,42 @@ static int height_channel(char titles[][LJGAP_FILES_TEXT], int n)
     return 0;
 }
 
-/* Copies a NUL-padded field of n bytes at p into out (at most size - 1 kept, then trimmed). */
+/* Copies a text of at most n bytes at p (it ends at a NUL) into out as valid UTF-8: UTF-8
+ * sequences are kept, any other byte above 0x7f is taken as Latin-1 (what older writers use),
+ * control characters become '?'; at most size - 1 bytes, no sequence cut, trailing blanks cut. */
+static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
+{
+    size_t i = 0, k = 0;
+    while (i < n && p[i]) {
+        unsigned char c = p[i], u[4];
+        size_t m = 1, take = 1;
+        if (c >= 0x80) {
+            size_t need = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : 0;
+            size_t j = 1;
+            while (need && j < need && i + j < n && (p[i + j] & 0xc0) == 0x80)
+                j++;
+            if (need && j == need && !(c == 0xe0 && p[i + 1] < 0xa0) &&
+                !(c == 0xed && p[i + 1] >= 0xa0)) {
+                memcpy(u, p + i, need), m = take = need;
+            } else {
+                u[0] = (unsigned char)(0xc0 | c >> 6), u[1] = (unsigned char)(0x80 | (c & 0x3f));
+                m = 2;
+            }
+        } else {
+            u[0] = c < 0x20 || c == 0x7f ? '?' : c;
+        }
+        if (k + m + 1 > size) break;
+        memcpy(out + k, u, m), k += m, i += take;
+    }
+    out[k] = 0;
+    while (k && (out[k - 1] == ' ' || out[k - 1] == '?'))
+        out[--k] = 0;
+}
+
+/* A NUL-padded field of n bytes at p, as text. */
 static void field(const unsigned char *p, size_t n, char *out, size_t size)
 {
-    size_t k = 0;
-    while (k < n && k + 1 < size && p[k])
-        out[k] = (char)p[k], k++;
-    out[k] = 0;
-    while (k && isspace((unsigned char)out[k - 1]))
-        out[--k] = 0;
+    text_copy(p, n, out, size);
 }
 
 /* The value of "key: value" in the note (lines end in CR or LF), or NULL. */

@@ -159,17 +159,43 @@ static double length_factor(const char *u)
     return 0;
 }
 
-/* An ASCII tag's text (at most size - 1 bytes, NUL-terminated, trailing blanks cut). */
+/* Copies a text of at most n bytes at p (it ends at a NUL) into out as valid UTF-8: UTF-8
+ * sequences are kept, any other byte above 0x7f is taken as Latin-1 (what older writers use),
+ * control characters become '?'; at most size - 1 bytes, no sequence cut, trailing blanks cut. */
+static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
+{
+    size_t i = 0, k = 0;
+    while (i < n && p[i]) {
+        unsigned char c = p[i], u[4];
+        size_t m = 1, take = 1;
+        if (c >= 0x80) {
+            size_t need = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : 0;
+            size_t j = 1;
+            while (need && j < need && i + j < n && (p[i + j] & 0xc0) == 0x80)
+                j++;
+            if (need && j == need && !(c == 0xe0 && p[i + 1] < 0xa0) &&
+                !(c == 0xed && p[i + 1] >= 0xa0)) {
+                memcpy(u, p + i, need), m = take = need;
+            } else {
+                u[0] = (unsigned char)(0xc0 | c >> 6), u[1] = (unsigned char)(0x80 | (c & 0x3f));
+                m = 2;
+            }
+        } else {
+            u[0] = c < 0x20 || c == 0x7f ? '?' : c;
+        }
+        if (k + m + 1 > size) break;
+        memcpy(out + k, u, m), k += m, i += take;
+    }
+    out[k] = 0;
+    while (k && (out[k - 1] == ' ' || out[k - 1] == '?'))
+        out[--k] = 0;
+}
+
+/* An ASCII tag's text (empty when the tag is absent or of another type). */
 static void tag_text(const unsigned char *buf, const tiff_tag *g, char *out, size_t size)
 {
-    size_t k = 0;
     out[0] = 0;
-    if (!g->found || g->type != 2) return;
-    while (k < g->len && k + 1 < size && buf[g->at + k])
-        out[k] = (char)buf[g->at + k], k++;
-    out[k] = 0;
-    while (k && out[k - 1] == ' ')
-        out[--k] = 0;
+    if (g->found && g->type == 2) text_copy(buf + g->at, g->len, out, size);
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,

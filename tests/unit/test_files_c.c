@@ -155,6 +155,16 @@ static void test_ibw_types(void **state)
     assert_string_equal(m.instrument, "");
     map_free(&m);
     free(b.p);
+    /* Latin-1 texts (older Igor) come out as UTF-8: a µm step unit, a title with an umlaut */
+    static const char *const latin1[] = {"H\xf6he"};
+    igor_spec sl = {.type = 2, .nx = 4, .ny = 3, .nl = 1, .dx = 2, .dy = 2, .data_unit = "nm",
+                    .dim_unit = "\xb5m", .labels = latin1};
+    b = igor5(&sl);
+    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "h\xc3\xb6he", &m, &e), 0);
+    assert_string_equal(m.channel, "H\xc3\xb6he");
+    assert_true(fabs(m.size_x - 8e-6) < 1e-18);
+    map_free(&m);
+    free(b.p);
     /* every integer type, both byte orders */
     static const unsigned types[] = {0x08, 0x48, 0x10, 0x50, 0x20, 0x60};
     for (int be = 0; be < 2; be++)
