@@ -72,18 +72,26 @@ static size_t bin_size(unsigned v)
 /* The version and byte order of the first two bytes, 0 when they are no Igor version. */
 static unsigned version_of(const unsigned char *buf, size_t len, int *be)
 {
-    if (len < 2) return 0;
-    *be = buf[0] == 0;
-    unsigned v = *be ? buf[1] : buf[0] | (unsigned)buf[1] << 8;
+    ljgap_bytes b;
+    ljgap_bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap_bytes_at(&b, 0, 2);
+    if (!p) return 0;
+    *be = p[0] == 0;
+    unsigned v = *be ? p[1] : p[0] | (unsigned)p[1] << 8;
     return bin_size(v) ? v : 0;
 }
 
-/* The sum of the 16-bit words of [0, n), which Igor makes 0 mod 2^16 over the headers. */
-static unsigned checksum(const unsigned char *buf, size_t n, int be)
+/* The sum of the 16-bit words of [0, n), which Igor makes 0 mod 2^16 over the headers (1 when
+ * the file is shorter than n). */
+static unsigned checksum(const unsigned char *buf, size_t len, size_t n, int be)
 {
+    ljgap_bytes b;
+    ljgap_bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap_bytes_at(&b, 0, n);
     unsigned s = 0;
+    if (!p) return 1;
     for (size_t i = 0; i + 1 < n; i += 2)
-        s += be ? (unsigned)buf[i] << 8 | buf[i + 1] : buf[i] | (unsigned)buf[i + 1] << 8;
+        s += be ? (unsigned)p[i] << 8 | p[i + 1] : p[i] | (unsigned)p[i + 1] << 8;
     return s & 0xffff;
 }
 
@@ -93,9 +101,8 @@ static int ibw_probe(const unsigned char *buf, size_t len)
     unsigned v = version_of(buf, len, &be);
     if (!v) return 0;
     size_t head = bin_size(v) + (v == 5 ? WAVE5 : WAVE2);
-    if (len < head) return 0;
-    if (v == 5) return checksum(buf, head, be) == 0;
-    return checksum(buf, head, be) == 0 || (len >= head + 16 && checksum(buf, head + 16, be) == 0);
+    if (v == 5) return checksum(buf, len, head, be) == 0;
+    return checksum(buf, len, head, be) == 0 || checksum(buf, len, head + 16, be) == 0;
 }
 
 /* The factor to metres of a length unit ("m", "nm", "um", "µm", "Å"..., as text_copy gives
@@ -176,13 +183,17 @@ static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
 /* A NUL-padded field of n bytes at p, as text. */
 static void field(const unsigned char *p, size_t n, char *out, size_t size)
 {
-    text_copy(p, n, out, size);
+    if (p)
+        text_copy(p, n, out, size);
+    else
+        out[0] = 0;
 }
 
 /* The value of "key: value" in the note (lines end in CR or LF), or NULL. */
 static const char *note_value(const unsigned char *note, size_t n, const char *key, char *out)
 {
     size_t klen = strlen(key);
+    if (!note) return NULL;
     for (size_t i = 0; i < n;) {
         size_t e = i;
         while (e < n && note[e] != '\r' && note[e] != '\n')
@@ -362,12 +373,16 @@ static int read_v5(ljgap_bytes *b, wave *w, ljgap_files_err *err)
                        "the file ends inside a section of %llu bytes at offset %llu",
                        (unsigned long long)sizes[i], (unsigned long long)start[i]);
     }
-    if (note) w->note = b->buf + start[1], w->note_len = note;
-    if (data_eunits) field(b->buf + start[2], data_eunits, w->data_unit, sizeof w->data_unit);
+    if (note) w->note = ljgap_bytes_at(b, start[1], note), w->note_len = note;
+    if (data_eunits)
+        field(ljgap_bytes_at(b, start[2], data_eunits), data_eunits, w->data_unit,
+              sizeof w->data_unit);
     for (int i = 0; i < 2; i++)
         if (dim_eunits[i])
-            field(b->buf + start[3 + i], dim_eunits[i], w->dim_unit[i], sizeof w->dim_unit[i]);
-    if (dim_labels[2]) w->labels = b->buf + start[9], w->nlabels = dim_labels[2] / LABEL;
+            field(ljgap_bytes_at(b, start[3 + i], dim_eunits[i]), dim_eunits[i], w->dim_unit[i],
+                  sizeof w->dim_unit[i]);
+    if (dim_labels[2])
+        w->labels = ljgap_bytes_at(b, start[9], dim_labels[2]), w->nlabels = dim_labels[2] / LABEL;
     return 0;
 }
 
@@ -405,7 +420,7 @@ static int read_v2(ljgap_bytes *b, wave *w, ljgap_files_err *err)
     uint64_t at = (uint64_t)bh + wfm;
     if (at > b->len) return bad(err, (long)b->len, "the file ends inside the data");
     if (at + note > b->len) return bad(err, (long)b->len, "the file ends inside the note");
-    if (note) w->note = b->buf + at, w->note_len = note;
+    if (note) w->note = ljgap_bytes_at(b, at, note), w->note_len = note;
     return 0;
 }
 

@@ -192,10 +192,11 @@ static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
 }
 
 /* An ASCII tag's text (empty when the tag is absent or of another type). */
-static void tag_text(const unsigned char *buf, const tiff_tag *g, char *out, size_t size)
+static void tag_text(ljgap_bytes *b, const tiff_tag *g, char *out, size_t size)
 {
+    const unsigned char *p = g->found && g->type == 2 ? ljgap_bytes_at(b, g->at, g->len) : NULL;
     out[0] = 0;
-    if (g->found && g->type == 2) text_copy(buf + g->at, g->len, out, size);
+    if (p) text_copy(p, g->len, out, size);
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
@@ -259,8 +260,10 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 
     /* texts: the channel, the unit, the instrument, the date */
     char title[LJGAP_FILES_TEXT], unit[32];
-    utf16(buf + h + 4, 32, title, sizeof title);
-    utf16(buf + h + 244, 8, unit, sizeof unit);
+    const unsigned char *tp = ljgap_bytes_at(&b, h + 4, 64), *up = ljgap_bytes_at(&b, h + 244, 16);
+    if (!tp || !up) return bad(err, (long)b.where, "the image header is truncated");
+    utf16(tp, 32, title, sizeof title);
+    utf16(up, 8, unit, sizeof unit);
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "%s", title[0] ? title : "channel 0");
     map->n_channels = 1;
     if (channel && *channel && strcmp(channel, "0") && strcmp(channel, map->channels[0]) &&
@@ -273,14 +276,14 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[0]);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", unit);
     char make[LJGAP_FILES_TEXT / 2], model[LJGAP_FILES_TEXT / 2], dt[32];
-    tag_text(buf, &tags[T_MAKE], make, sizeof make);
-    tag_text(buf, &tags[T_MODEL], model, sizeof model);
+    tag_text(&b, &tags[T_MAKE], make, sizeof make);
+    tag_text(&b, &tags[T_MODEL], model, sizeof model);
     if (make[0] || model[0])
         snprintf(map->instrument, sizeof map->instrument, "%s%s%s", make,
                  make[0] && model[0] ? " " : "", model);
     else
         snprintf(map->instrument, sizeof map->instrument, "Park Systems");
-    tag_text(buf, &tags[T_DATETIME], dt, sizeof dt);
+    tag_text(&b, &tags[T_DATETIME], dt, sizeof dt);
     int Y, M, D, hh, mm, ss;
     if (sscanf(dt, "%4d:%2d:%2d %2d:%2d:%2d", &Y, &M, &D, &hh, &mm, &ss) == 6 && Y >= 0 &&
         Y <= 9999 && M >= 1 && M <= 12 && D >= 1 && D <= 31 && hh >= 0 && hh < 24 && mm >= 0 &&

@@ -52,8 +52,11 @@ static int ctime_date(const unsigned char *buf, size_t len, char *iso, size_t si
     static const char months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
     char s[25], wd[4], mon[4];
     int day, h, m, sec, y, n = 0;
-    if (len < 25 || buf[24] != 0) return 0;
-    memcpy(s, buf, 25);
+    ljgap_bytes b;
+    ljgap_bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap_bytes_at(&b, 0, 25);
+    if (!p || p[24] != 0) return 0;
+    memcpy(s, p, 25);
     if (sscanf(s, "%3s %3s %2d %2d:%2d:%2d %4d%n", wd, mon, &day, &h, &m, &sec, &y, &n) != 7 ||
         n != 24)
         return 0;
