@@ -7,7 +7,7 @@
 # point (relative 1e-6), in grid, size and height unit, with our missing points exactly where
 # Gwyddion masks points. One "ok"/"not ok" line per channel compared; without gwyddion
 # "ok 1 # skip no gwyddion".
-#   BUILD=build tests/files/check_c.sh
+#   BUILD=build [SEED=28] tests/files/check_c.sh   (SEED: the generator's random heights)
 set -u
 cd "$(dirname "$0")/../.."
 BUILD=${BUILD:-build}
@@ -32,7 +32,7 @@ fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 mkdir -p "$tmp/home"
-if ! "$py" tests/files/gen_c.py "$tmp"; then
+if ! "$py" tests/files/gen_c.py "$tmp" "${SEED:-28}"; then
     echo "not ok 1 - gen_c.py failed"
     exit 0
 fi
