@@ -1,25 +1,29 @@
 /* park_tiff.c -- Park Systems (formerly PSIA) AFM images: a TIFF whose picture is only a preview
  * and whose heights sit in private tags.
  *
- * The file is a classic TIFF ("II*\0", or "MM\0*" read the same way), so a small IFD walker of
- * our own (bounded: the entry count is checked against the bytes left, every value through
- * bytes.h) finds the tags of the first directory (and requires its next-directory offset). Park's
- * tags, as Park documents them and as Gwyddion's psia module and SurfaceTopography read them: 50432
- * magic, LONG 0x0E031301 (no file without it is claimed: a plain TIFF is not Park's) 50433 version,
- * LONG 0x01000001 or 0x01000002 50434  the data, BYTE[n]: int16 (version 1), or as the header's
- * data type says (version 2: 0 int16, 1 int32, 2 float32), little endian, row after row 50435  the
- * image header, BYTE[n] (at least 356 bytes in version 1, 580 in version 2), little endian: image
- * type (u32 at 0: 0 a 2-D image; line profiles and spectroscopy are not read), source name (the
- * channel, UTF-16 32 units at 4), image mode (UTF-16 8 at 68), xres, yres (u32 at 100, 104),
- * swap_xy (u32 at 136: the fast axis is y), the scan size in µm (double at 140, 148), data gain, z
- * scale, z offset (doubles at 220, 228, 236), z unit (UTF-16 8 at 244); version 2: the data type
- * (u32 at 348). 306    DateTime ("YYYY:MM:DD HH:MM:SS"), 271/272 Make and Model, where written. A
- * height is data_gain * (raw * z_scale + z_offset) in the z unit (z_scale 0 means 1), as Gwyddion
- * computes it, converted to metres when the unit is a length (um, nm, m...). The rows are stored
- * bottom first, so they come out reversed (as Gwyddion shows them); with swap_xy the map is turned
- * a quarter counter-clockwise, as Gwyddion does. Non-finite floats are missing points. One channel
- * a file (Park writes one file per channel); instrument is "Park Systems" (the magic says so) or
- * the Make and Model tags where present.
+ * The file is a classic little-endian TIFF ("II*\0": Park writes no other, and Gwyddion takes a
+ * big-endian one for a plain picture, so that is refused). A small IFD walker of our own
+ * (bounded: the entry count is checked against the bytes left, every value goes through
+ * bytes.h, the next-directory offset must be there) finds the tags of the first directory.
+ * Park's tags, as Gwyddion's psia module and SurfaceTopography describe them:
+ *   50432  magic, LONG 0x0E031301 (a TIFF without it is not claimed: a plain TIFF is not Park's)
+ *   50433  version, LONG 0x01000001 or 0x01000002
+ *   50434  the data, BYTE[n], little endian, row after row: int16 (version 1), or as the
+ *          header's data type says (version 2: 0 int16, 1 int32, 2 float32)
+ *   50435  the image header, BYTE[n] (at least 356 bytes in version 1, 580 in version 2), little
+ *          endian: image type (u32 at 0: 0 a 2-D image; line profiles and spectroscopy are not
+ *          read), source name (the channel, UTF-16, 32 units at 4), image mode (8 at 68), xres,
+ *          yres (u32 at 100, 104), swap_xy (u32 at 136: the fast axis was y; the data are in
+ *          image order all the same), the scan size in µm (doubles at 140, 148), data gain,
+ *          z scale, z offset (doubles at 220, 228, 236), z unit (UTF-16, 8 at 244); version 2:
+ *          the data type (u32 at 348)
+ *   306    DateTime ("YYYY:MM:DD HH:MM:SS"); 271, 272 Make and Model, where written.
+ * A height is data_gain * (raw * z_scale + z_offset) in the z unit (z_scale 0 means 1), as
+ * Gwyddion computes it, converted to metres when the unit is a length (um, nm, m...). The rows
+ * are stored bottom first, so they come out reversed, as Gwyddion shows them (Gwyddion once also
+ * turned swap_xy maps a quarter turn; 2.62 no longer does, and neither do we). Non-finite floats
+ * are missing points. One channel a file (Park writes a file per channel); the instrument is
+ * "Park Systems" (the magic says so), or the Make and Model tags where present.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -118,7 +122,7 @@ static int park_probe(const unsigned char *buf, size_t len)
     tiff_tag tags[T_N];
     int be;
     size_t where;
-    if (tiff_walk(&b, &be, tags, &where)) return 0;
+    if (tiff_walk(&b, &be, tags, &where) || be) return 0;
     return tag_uint(&b, &tags[T_MAGIC], be) == PARK_MAGIC;
 }
 
@@ -211,6 +215,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     size_t where;
     if (tiff_walk(&b, &be, tags, &where))
         return bad(err, (long)where, "the TIFF structure is truncated or corrupt");
+    if (be) return bad(err, 0, "a big-endian TIFF: Park Systems files are little endian");
     if (tag_uint(&b, &tags[T_MAGIC], be) != PARK_MAGIC)
         return bad(err, tags[T_MAGIC].found ? (long)tags[T_MAGIC].entry : -1,
                    "no Park Systems magic number (tag 50432)");

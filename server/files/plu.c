@@ -15,7 +15,8 @@
  *        2300 XGA, 2 PLu 2300 XGA T5, 3 PLu 2300 SXGA, 4 PLu 3300), image number, reserved
  *        (u8 each), 2 bytes of padding, 496 factor_delmacio (u32)
  *   500  each layer: yres, xres (u32), yres x xres heights in µm (f32, row after row), then
- *        its minimum and maximum (f32 each; needed only to find the next layer).
+ *        its minimum and maximum (f32 each). Every layer must be there in full (the last one's
+ *        minimum and maximum, which nothing needs, may be missing, as Gwyddion allows).
  * The value 1000001 marks a point not measured: it is a missing point (NaN), as a non-finite
  * value is. Every layer is a channel ("layer 0", ...; 0, the topography, by default), the
  * hardware gives the instrument, the ctime text the date (the writer's local time). A profile

@@ -157,8 +157,15 @@ static void test_ibw_types(void **state)
     free(b.p);
     /* Latin-1 texts (older Igor) come out as UTF-8: a µm step unit, a title with an umlaut */
     static const char *const latin1[] = {"H\xf6he"};
-    igor_spec sl = {.type = 2, .nx = 4, .ny = 3, .nl = 1, .dx = 2, .dy = 2, .data_unit = "nm",
-                    .dim_unit = "\xb5m", .labels = latin1};
+    igor_spec sl = {.type = 2,
+                    .nx = 4,
+                    .ny = 3,
+                    .nl = 1,
+                    .dx = 2,
+                    .dy = 2,
+                    .data_unit = "nm",
+                    .dim_unit = "\xb5m",
+                    .labels = latin1};
     b = igor5(&sl);
     assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "h\xc3\xb6he", &m, &e), 0);
     assert_string_equal(m.channel, "H\xc3\xb6he");
@@ -423,7 +430,13 @@ static void test_park_bad(void **state)
     assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_null(m.z);
     free(b.p);
-    s.park = 1, s.short_header = 1;
+    s.park = 1; /* the same file as a big-endian TIFF: not Park's */
+    b = park_tiff(&s);
+    memcpy(b.p, "MM\0*", 4);
+    assert_false(ljgap_files_park_tiff.probe(b.p, b.n));
+    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    free(b.p);
+    s.short_header = 1;
     b = park_tiff(&s);
     assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_non_null(strstr(e.msg, "header"));
