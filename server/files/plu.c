@@ -1,0 +1,192 @@
+/* plu.c -- Sensofar PLu files (.plu): the confocal and interferometric profilers' binary format,
+ * versions 2000 and 2006 (the later .plux is a zip of XML and images and is not read here).
+ *
+ * Layout (little endian; as Gwyddion's sensofar module and SurfaceTopography's PLU reader
+ * describe it): a 500-byte header, then the layers.
+ *     0  the date, 128 bytes, C's ctime() text "Wed Jun 30 21:49:08 1993" NUL-terminated (a
+ *        date of that form is the only magic the format has: the probe checks it)
+ *   128  time_t (u32), 132 a comment (256 bytes)
+ *   388  the calibration: yres, xres, N_tall (u32), dy_multip, mppx, mppy (µm a pixel), x0,
+ *        y0, mpp_tall, z0 (f32)
+ *   428  the measurement: type (u32: 0 image, 1 profile, 3 topography, 5 thickness; 2 multiple
+ *        profiles, 4 coordinates and 6 custom are not read), algorithm, method, objective, area
+ *        type, 20 more bytes of scan settings, incr_z (f64), range (f32), n_planes, tpc (u32)
+ *   488  restore, number of layers, format version (0: 2000, 255: 2006), hardware (0 PLu, 1 PLu
+ *        2300 XGA, 2 PLu 2300 XGA T5, 3 PLu 2300 SXGA, 4 PLu 3300), image number, reserved
+ *        (u8 each), 2 bytes of padding, 496 factor_delmacio (u32)
+ *   500  each layer: yres, xres (u32), yres x xres heights in µm (f32, row after row), then
+ *        its minimum and maximum (f32 each). Every layer must be there in full (the last one's
+ *        minimum and maximum, which nothing needs, may be missing, as Gwyddion allows).
+ * The value 1000001 marks a point not measured: it is a missing point (NaN), as a non-finite
+ * value is. Every layer is a channel ("layer 0", ...; 0, the topography, by default), the
+ * hardware gives the instrument, the ctime text the date (the writer's local time). A profile
+ * (one row) has no y size.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bytes.h"
+#include "files.h"
+
+#define NAME "plu"
+#define HEADER 500
+#define NO_DATA 1000001.0f
+
+static int bad(ljgap_files_err *err, long offset, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    err->format = NAME, err->offset = offset, err->member[0] = 0;
+    return LJGAP_FILES_BAD;
+}
+
+/* Whether buf starts with a ctime() date, "Www Mmm dd hh:mm:ss yyyy" and a NUL; its parts in
+ * the ISO 8601 form into iso (may be NULL). */
+static int ctime_date(const unsigned char *buf, size_t len, char *iso, size_t size)
+{
+    static const char days[] = "SunMonTueWedThuFriSat";
+    static const char months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
+    char s[25], wd[4], mon[4];
+    int day, h, m, sec, y, n = 0;
+    ljgap_bytes b;
+    ljgap_bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap_bytes_at(&b, 0, 25);
+    if (!p || p[24] != 0) return 0;
+    memcpy(s, p, 25);
+    if (sscanf(s, "%3s %3s %2d %2d:%2d:%2d %4d%n", wd, mon, &day, &h, &m, &sec, &y, &n) != 7 ||
+        n != 24)
+        return 0;
+    const char *dp = strstr(days, wd), *mp = strstr(months, mon);
+    if (strlen(wd) != 3 || strlen(mon) != 3 || !dp || (dp - days) % 3 || !mp || (mp - months) % 3 ||
+        day < 1 || day > 31 || h < 0 || h > 23 || m < 0 || m > 59 || sec < 0 || sec > 60 || y < 0)
+        return 0;
+    if (iso)
+        snprintf(iso, size, "%04d-%02d-%02dT%02d:%02d:%02d", y, (int)(mp - months) / 3 + 1, day, h,
+                 m, sec);
+    return 1;
+}
+
+static int plu_probe(const unsigned char *buf, size_t len)
+{
+    return ctime_date(buf, len, NULL, 0);
+}
+
+/* The index of the channel a query names (see ibw.c), -1 when there is none. */
+static int pick_channel(const char *channel, char titles[][LJGAP_FILES_TEXT], int n)
+{
+    if (!channel || !*channel) return 0; /* layer 0: the topography */
+    size_t k = strspn(channel, "0123456789");
+    if (!channel[k] && k <= 4) {
+        int i = atoi(channel);
+        return i < n ? i : -1;
+    }
+    for (int i = 0; i < n; i++)
+        if (!strcasecmp(channel, titles[i])) return i;
+    return -1;
+}
+
+static int read_file(const unsigned char *buf, size_t len, const char *channel,
+                     ljgap_files_map *map, ljgap_files_err *err)
+{
+    static const char *const hardware[] = {"PLu", "PLu 2300 XGA", "PLu 2300 XGA T5",
+                                           "PLu 2300 SXGA", "PLu 3300"};
+    memset(map, 0, sizeof *map);
+    map->format = NAME;
+    if (!ctime_date(buf, len, map->acquired, sizeof map->acquired))
+        return bad(err, 0, "the file does not start with a date (Sensofar PLu)");
+    ljgap_bytes b;
+    ljgap_bytes_init(&b, buf, len);
+    ljgap_bytes_seek(&b, 404);
+    float mppx = ljgap_bytes_f32(&b, 0), mppy = ljgap_bytes_f32(&b, 0);
+    ljgap_bytes_seek(&b, 428);
+    uint32_t type = ljgap_bytes_u32(&b, 0);
+    ljgap_bytes_seek(&b, 489);
+    unsigned layers = ljgap_bytes_u8(&b), version = ljgap_bytes_u8(&b), hw = ljgap_bytes_u8(&b);
+    ljgap_bytes_seek(&b, HEADER);
+    if (b.bad) return bad(err, (long)b.where, "the header is truncated (500 bytes)");
+    if (type != 0 && type != 1 && type != 3 && type != 5)
+        return bad(err, 428,
+                   "measurement type %u (multiple profiles, coordinates, custom) is "
+                   "not read",
+                   type);
+    if (version != 0 && version != 255) return bad(err, 490, "unknown format version %u", version);
+    if (layers == 0) layers = 1; /* version 2000 files may say 0 */
+    snprintf(map->instrument, sizeof map->instrument, "Sensofar %s",
+             hw < sizeof hardware / sizeof hardware[0] ? hardware[hw] : "PLu");
+    int n = (int)(layers < LJGAP_FILES_MAX_CHANNELS ? layers : LJGAP_FILES_MAX_CHANNELS);
+    for (int c = 0; c < n; c++)
+        snprintf(map->channels[c], LJGAP_FILES_TEXT, "layer %d", c);
+    map->n_channels = n;
+    int ch = pick_channel(channel, map->channels, n);
+    if (ch < 0) {
+        snprintf(err->msg, sizeof err->msg, "no channel \"%s\" among the file's %d layers", channel,
+                 n);
+        err->format = NAME, err->offset = -1, err->member[0] = 0;
+        return LJGAP_FILES_CHANNEL;
+    }
+    map->channel_index = ch;
+    snprintf(map->channel, sizeof map->channel, "%s", map->channels[ch]);
+    snprintf(map->z_unit, sizeof map->z_unit, "um");
+
+    /* every layer must be there (8 bytes of sizes, the heights, 8 bytes of min and max, which
+     * the last one may lack); the one asked for is kept */
+    uint32_t yres = 0, xres = 0;
+    size_t data = 0;
+    for (unsigned c = 0; c < layers; c++) {
+        size_t at = b.pos;
+        uint32_t ny = ljgap_bytes_u32(&b, 0), nx = ljgap_bytes_u32(&b, 0);
+        if (b.bad) return bad(err, (long)b.where, "the file ends before layer %u's sizes", c);
+        if (nx == 0 || ny == 0) return bad(err, (long)at, "layer %u has %u x %u points", c, ny, nx);
+        if ((uint64_t)nx * ny > LJGAP_FILES_MAX_POINTS) {
+            snprintf(err->msg, sizeof err->msg, "layer %u: %u x %u points are too many", c, ny, nx);
+            err->format = NAME, err->offset = -1, err->member[0] = 0;
+            return LJGAP_FILES_TOOBIG;
+        }
+        uint64_t bytes = (uint64_t)nx * ny * 4;
+        if (!ljgap_bytes_has(&b, b.pos, bytes))
+            return bad(err, (long)len, "the file ends inside layer %u (%u x %u heights at %zu)", c,
+                       ny, nx, b.pos);
+        if (c == (unsigned)ch) yres = ny, xres = nx, data = b.pos;
+        if (c + 1 < layers && ljgap_bytes_seek(&b, b.pos + bytes + 8))
+            return bad(err, (long)len, "the file ends after layer %u", c);
+    }
+    ljgap_bytes_seek(&b, data);
+    map->z = malloc((size_t)xres * yres * sizeof *map->z);
+    if (!map->z) return LJGAP_FILES_NOMEM;
+    map->nx = xres, map->ny = yres;
+    for (size_t i = 0; i < (size_t)xres * yres; i++) {
+        float v = ljgap_bytes_f32(&b, 0);
+        if (v == NO_DATA || !isfinite(v))
+            map->z[i] = NAN, map->missing++;
+        else
+            map->z[i] = v * 1e-6;
+    }
+    double sx = fabs((double)mppx) * xres * 1e-6, sy = fabs((double)mppy) * yres * 1e-6;
+    map->size_x = isfinite(sx) ? sx : 0;
+    map->size_y = yres > 1 && isfinite(sy) ? sy : 0;
+    return 0;
+}
+
+/* The reader: read_file, with a fault's offset kept inside the file (a length or an offset
+ * read from a header may point past its end: the fault is then where the file ends). */
+static int plu_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
+{
+    err->offset = -1;
+    int rc = read_file(buf, len, channel, map, err);
+    if (rc == LJGAP_FILES_BAD && err->offset > (long)len) err->offset = (long)len;
+    return rc;
+}
+
+const ljgap_files_format ljgap_files_plu = {
+    .name = NAME,
+    .extensions = ".plu",
+    .media_type = "application/x-sensofar-spm",
+    .probe = plu_probe,
+    .read = plu_read,
+};
