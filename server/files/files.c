@@ -1,0 +1,271 @@
+/* files.c -- the registry of the instrument-file readers and what they share (files.h).
+ *
+ * ljgap_files_read recognises a file by content: every reader's probe (magic bytes and a look
+ * at the structure) is asked in the registry's order, most specific first, the loosest (xyz
+ * text columns) last; the first that says yes reads it. A format name forces that reader
+ * (its own checks then say whether the bytes are that format: 422 bad-file, not 415).
+ *
+ * What the readers share lives here too: the message of a failure (ljgap_files_fail), the
+ * map's allocation against LJGAP_FILES_MAX_POINTS (ljgap_files_alloc), the choice of a
+ * channel from the titles a reader found (ljgap_files_channel_pick: an index, a title, or the
+ * height channel by its name), length units to metres (ljgap_files_unit_scale), the count of
+ * missing points, and the largest complete rectangle of a map with holes, which is what the
+ * PSD is computed on (docs/topography.md, "Instrument files").
+ */
+#include "files.h"
+#include "files_util.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* Most specific first: binary formats with magic bytes, then text headers, xyz columns last. */
+static const ljgap_files_format *const registry[] = {
+    &ljgap_files_nanoscope, &ljgap_files_gwy, &ljgap_files_gsf,
+    /* merged by the lead: &ljgap_files_x3p, &ljgap_files_sur, &ljgap_files_netcdf,
+     * &ljgap_files_metropro, &ljgap_files_ibw, &ljgap_files_park_tiff, &ljgap_files_plu, */
+    &ljgap_files_xyz, NULL};
+
+const ljgap_files_format *const *ljgap_files_formats(void)
+{
+    return registry;
+}
+
+const ljgap_files_format *ljgap_files_find(const char *name)
+{
+    for (const ljgap_files_format *const *f = registry; *f; f++)
+        if (strcasecmp((*f)->name, name) == 0) return *f;
+    return NULL;
+}
+
+void ljgap_files_names(char *out, size_t size)
+{
+    size_t k = 0;
+    out[0] = '\0';
+    for (const ljgap_files_format *const *f = registry; *f && k < size; f++) {
+        int n = snprintf(out + k, size - k, "%s%s (%s)", k ? ", " : "", (*f)->name,
+                         (*f)->extensions);
+        if (n < 0) break;
+        k += (size_t)n;
+    }
+}
+
+int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, const char *member,
+                     const char *fmt, ...)
+{
+    va_list ap;
+    if (!err) return LJGAP_FILES_BAD;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    err->format = format;
+    err->offset = offset;
+    snprintf(err->member, sizeof err->member, "%s", member ? member : "");
+    return LJGAP_FILES_BAD;
+}
+
+int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err)
+{
+    if (nx == 0 || ny == 0)
+        return ljgap_files_fail(err, map->format, -1, NULL, "a map of %zu x %zu points", nx, ny);
+    if (nx > LJGAP_FILES_MAX_POINTS / ny) {
+        ljgap_files_fail(err, map->format, -1, NULL,
+                         "%zu x %zu points: more than the %u a map may have", nx, ny,
+                         LJGAP_FILES_MAX_POINTS);
+        return LJGAP_FILES_TOOBIG;
+    }
+    free(map->z);
+    if (!(map->z = malloc(nx * ny * sizeof *map->z))) {
+        snprintf(err->msg, sizeof err->msg, "out of memory for %zu x %zu points", nx, ny);
+        return LJGAP_FILES_NOMEM;
+    }
+    map->nx = nx;
+    map->ny = ny;
+    return 0;
+}
+
+void ljgap_files_add_channel(ljgap_files_map *map, const char *title)
+{
+    if (map->n_channels >= LJGAP_FILES_MAX_CHANNELS) return;
+    ljgap_files_text(map->channels[map->n_channels++], LJGAP_FILES_TEXT, title, strlen(title));
+}
+
+void ljgap_files_text(char *out, size_t size, const char *s, size_t n)
+{
+    size_t k = 0;
+    while (n && isspace((unsigned char)*s))
+        s++, n--;
+    while (n && (isspace((unsigned char)s[n - 1]) || s[n - 1] == '\0'))
+        n--;
+    /* printable ASCII and whole UTF-8 sequences kept; other bytes (Latin-1) become '?' */
+    for (size_t i = 0; i < n && k + 1 < size && s[i]; i++) {
+        unsigned char c = (unsigned char)s[i];
+        out[k++] = (c >= 0x20 && c < 0x7f) ? (char)c : '?';
+    }
+    out[k] = '\0';
+}
+
+/* Is the title one of a height channel's names? */
+static int is_height_title(const char *t)
+{
+    static const char *const words[] = {"height", "topograph", "zsensor", "z sensor", "z-sensor",
+                                        "surface", NULL};
+    char low[LJGAP_FILES_TEXT];
+    size_t i = 0;
+    for (; t[i] && i + 1 < sizeof low; i++)
+        low[i] = (char)tolower((unsigned char)t[i]);
+    low[i] = '\0';
+    for (int k = 0; words[k]; k++)
+        if (strstr(low, words[k])) return 1;
+    return 0;
+}
+
+int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
+                             ljgap_files_err *err)
+{
+    char list[LJGAP_FILES_MAX_CHANNELS * 24] = "";
+    size_t k = 0;
+    if (map->n_channels <= 0) {
+        ljgap_files_fail(err, map->format, -1, NULL, "the file holds no channel of data");
+        return -1;
+    }
+    if (!channel || !*channel) {
+        for (int i = 0; i < map->n_channels; i++)
+            if (is_height_title(map->channels[i])) return i;
+        return 0;
+    }
+    if (strspn(channel, "0123456789") == strlen(channel) && strlen(channel) < 6) {
+        int i = atoi(channel);
+        if (i < map->n_channels) return i;
+    } else {
+        for (int i = 0; i < map->n_channels; i++)
+            if (strcasecmp(map->channels[i], channel) == 0) return i;
+    }
+    for (int i = 0; i < map->n_channels && k < sizeof list; i++) {
+        int n = snprintf(list + k, sizeof list - k, "%s%d \"%.16s\"", i ? ", " : "", i,
+                         map->channels[i]);
+        if (n < 0) break;
+        k += (size_t)n;
+    }
+    snprintf(err->msg, sizeof err->msg, "no channel \"%.40s\": the file has %.200s", channel,
+             list);
+    err->format = map->format;
+    err->offset = -1;
+    err->member[0] = '\0';
+    return -1;
+}
+
+double ljgap_files_unit_scale(const char *unit)
+{
+    static const struct {
+        const char *name;
+        double scale;
+    } units[] = {{"m", 1},          {"mm", 1e-3},     {"um", 1e-6},    {"~m", 1e-6},
+                 {"\xc2\xb5m", 1e-6}, {"\xb5m", 1e-6}, {"micron", 1e-6}, {"microns", 1e-6},
+                 {"nm", 1e-9},      {"pm", 1e-12},    {"A", 1e-10},    {"\xc3\x85", 1e-10},
+                 {"angstrom", 1e-10}, {"km", 1e3},    {"cm", 1e-2}};
+    for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
+        if (strcmp(unit, units[i].name) == 0) return units[i].scale;
+    return 0;
+}
+
+size_t ljgap_files_count_missing(ljgap_files_map *map)
+{
+    size_t n = 0, N = map->nx * map->ny;
+    for (size_t i = 0; i < N; i++)
+        n += isnan(map->z[i]) != 0;
+    map->missing = n;
+    return n;
+}
+
+int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0, size_t *w,
+                             size_t *h)
+{
+    /* the maximal rectangle of complete points: per row, the heights of the columns of
+     * complete points ending there, then the largest rectangle under that histogram (a stack
+     * of increasing heights); O(nx ny) */
+    size_t nx = map->nx, ny = map->ny, best = 0;
+    size_t *col = calloc(nx + 1, sizeof *col), *stack = malloc((nx + 1) * sizeof *stack);
+    *x0 = *y0 = *w = *h = 0;
+    if (!col || !stack) {
+        free(col);
+        free(stack);
+        return -1;
+    }
+    for (size_t j = 0; j < ny; j++) {
+        size_t top = 0;
+        for (size_t i = 0; i < nx; i++)
+            col[i] = isnan(map->z[j * nx + i]) ? 0 : col[i] + 1;
+        col[nx] = 0;
+        for (size_t i = 0; i <= nx; i++) {
+            while (top && col[stack[top - 1]] >= col[i]) {
+                size_t hh = col[stack[--top]];
+                size_t left = top ? stack[top - 1] + 1 : 0, ww = i - left;
+                if (hh * ww > best) {
+                    best = hh * ww;
+                    *x0 = left, *w = ww, *h = hh, *y0 = j + 1 - hh;
+                }
+            }
+            stack[top++] = i;
+        }
+    }
+    free(col);
+    free(stack);
+    return 0;
+}
+
+void ljgap_files_map_free(ljgap_files_map *map)
+{
+    if (!map) return;
+    free(map->z);
+    map->z = NULL;
+    map->nx = map->ny = 0;
+}
+
+int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
+                     const char *channel, ljgap_files_map *map, ljgap_files_err *err)
+{
+    const ljgap_files_format *f = NULL;
+    char names[600];
+    int st;
+    memset(map, 0, sizeof *map);
+    memset(err, 0, sizeof *err);
+    err->offset = -1;
+    if (!buf) len = 0;
+    if (format && *format) {
+        if (!(f = ljgap_files_find(format))) {
+            ljgap_files_names(names, sizeof names);
+            snprintf(err->msg, sizeof err->msg, "no format \"%.32s\": the formats read are %s",
+                     format, names);
+            return LJGAP_FILES_UNKNOWN;
+        }
+    } else {
+        for (const ljgap_files_format *const *g = registry; *g && !f; g++)
+            if (len && (*g)->probe(buf, len)) f = *g;
+        if (!f) {
+            ljgap_files_names(names, sizeof names);
+            snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %s", names);
+            return LJGAP_FILES_UNKNOWN;
+        }
+    }
+    map->format = f->name;
+    err->format = f->name;
+    st = len ? f->read(buf, len, channel && *channel ? channel : NULL, map, err)
+             : ljgap_files_fail(err, f->name, 0, NULL, "the file is empty");
+    if (st == 0 && (!map->z || !map->nx || !map->ny))
+        st = ljgap_files_fail(err, f->name, -1, NULL, "the reader found no data");
+    if (st == 0) {
+        ljgap_files_count_missing(map);
+        if (map->missing == map->nx * map->ny)
+            st = ljgap_files_fail(err, f->name, -1, NULL, "every point of the map is missing");
+    }
+    if (st) {
+        ljgap_files_map_free(map);
+        if (!err->format) err->format = f->name;
+    }
+    return st;
+}
