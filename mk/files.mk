@@ -3,7 +3,8 @@
 # Gwyddion needs (tests/files/run.sh: gwyddion converts the test files headless, numpy reads
 # them back).
 TEST_DEBS += gwyddion python3-numpy
-FILES_DUMP := $(BUILD)/tests/files_dump
+# in a folder of its own: every program right in $(BUILD)/tests/ is run as a unit test
+FILES_DUMP := $(BUILD)/tests/files/files_dump
 ALL_EXTRA += $(FILES_DUMP)
 TEST_PREP += $(FILES_DUMP)
 

@@ -75,7 +75,10 @@ static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap_f
         line *L = &h->l[h->n];
         L->key = s + 1;
         L->where = at;
-        const char *colon = memchr(s, ':', n);
+        /* "\@2:Z scale: V ...": the key ends at the first ": " (or a ':' ending the line) */
+        const char *colon = NULL;
+        for (size_t i = 1; i < n && !colon; i++)
+            if (s[i] == ':' && (i + 1 == n || s[i + 1] == ' ')) colon = s + i;
         if (s[1] == '*') {
             L->klen = n - 1, L->val = s + n, L->vlen = 0;
             section = h->n;
@@ -281,6 +284,18 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
     if (!n_img) {
         st = ljgap_files_fail(err, NAME, -1, NULL, "the header lists no image (\\*Ciao image list)");
         goto end;
+    }
+    /* a file cut short is bad even where it cuts a channel not asked for */
+    for (int i = 0; i < n_img; i++) {
+        long long o = number(&h, images[i], "Data offset"), w = number(&h, images[i], "Samps/line"),
+                  r = number(&h, images[i], "Number of lines"), p = number(&h, images[i], "Bytes/pixel");
+        if (o >= 0 && w > 0 && r > 0 && w <= 65536 && r <= 65536 &&
+            (unsigned long long)o + (unsigned long long)(w * r * (p == 4 ? 4 : 2)) > len) {
+            st = ljgap_files_fail(err, NAME, (long)len, NULL,
+                                  "image %d \"%s\" ends at byte %lld, the file has %zu (truncated)", i,
+                                  map->channels[i], o + w * r * (p == 4 ? 4 : 2), len);
+            goto end;
+        }
     }
     if ((pick = ljgap_files_channel_pick(map, channel, err)) < 0) {
         st = LJGAP_FILES_CHANNEL;

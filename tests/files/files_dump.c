@@ -1,4 +1,4 @@
-/* files_dump.c -- build/tests/files_dump: what ljgap_files_read makes of a file, for the
+/* files_dump.c -- build/tests/files/files_dump: what ljgap_files_read makes of a file, for the
  * tests (tests/files/run.sh compares it with the generators' values and with Gwyddion's).
  *
  *   files_dump FILE [FORMAT [CHANNEL]]   prints "key value" lines (format, channel, channels,
