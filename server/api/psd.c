@@ -206,6 +206,10 @@ int ljgap_run_psd(job *j)
     ljgap_ans_put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
     ljgap_ans_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
     ljgap_ans_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
+    if (j->rq.source) { /* an instrument file: what it said (psd_file.c) */
+        ljgap_ans_put(j, j->ans, "source", j->rq.source);
+        j->rq.source = NULL;
+    }
     rel = ljgap_ans_put(j, j->ans, "reliable", cJSON_CreateObject());
     ljgap_ans_num(j, rel, "k_min", r.rel_kmin, "reliable.k_min", -1);
     ljgap_ans_num(j, rel, "k_max", r.rel_kmax, "reliable.k_max", -1);

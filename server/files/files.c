@@ -42,16 +42,23 @@ const ljgap_files_format *ljgap_files_find(const char *name)
     return NULL;
 }
 
-void ljgap_files_names(char *out, size_t size)
+/* The names of the formats ("nanoscope, gwy, ..."), with their extensions when ext. */
+static void names_of(char *out, size_t size, int ext)
 {
     size_t k = 0;
     out[0] = '\0';
     for (const ljgap_files_format *const *f = registry; *f && k < size; f++) {
-        int n = snprintf(out + k, size - k, "%s%s (%s)", k ? ", " : "", (*f)->name,
-                         (*f)->extensions);
+        int n = ext ? snprintf(out + k, size - k, "%s%s (%s)", k ? ", " : "", (*f)->name,
+                               (*f)->extensions)
+                    : snprintf(out + k, size - k, "%s%s", k ? ", " : "", (*f)->name);
         if (n < 0) break;
         k += (size_t)n;
     }
+}
+
+void ljgap_files_names(char *out, size_t size)
+{
+    names_of(out, size, 1);
 }
 
 int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, const char *member,
@@ -151,7 +158,7 @@ int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
         if (n < 0) break;
         k += (size_t)n;
     }
-    snprintf(err->msg, sizeof err->msg, "no channel \"%.40s\": the file has %.200s", channel,
+    snprintf(err->msg, sizeof err->msg, "no channel \"%.40s\": the file has %.180s", channel,
              list);
     err->format = map->format;
     err->offset = -1;
@@ -230,7 +237,7 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
                      const char *channel, ljgap_files_map *map, ljgap_files_err *err)
 {
     const ljgap_files_format *f = NULL;
-    char names[600];
+    char names[160];
     int st;
     memset(map, 0, sizeof *map);
     memset(err, 0, sizeof *err);
@@ -238,8 +245,8 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
     if (!buf) len = 0;
     if (format && *format) {
         if (!(f = ljgap_files_find(format))) {
-            ljgap_files_names(names, sizeof names);
-            snprintf(err->msg, sizeof err->msg, "no format \"%.32s\": the formats read are %s",
+            names_of(names, sizeof names, 0);
+            snprintf(err->msg, sizeof err->msg, "no format \"%.32s\": the formats read are %.160s",
                      format, names);
             return LJGAP_FILES_UNKNOWN;
         }
@@ -247,8 +254,9 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
         for (const ljgap_files_format *const *g = registry; *g && !f; g++)
             if (len && (*g)->probe(buf, len)) f = *g;
         if (!f) {
-            ljgap_files_names(names, sizeof names);
-            snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %s", names);
+            names_of(names, sizeof names, 0);
+            snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %.160s",
+                     names);
             return LJGAP_FILES_UNKNOWN;
         }
     }

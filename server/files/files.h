@@ -100,4 +100,8 @@ size_t ljgap_files_count_missing(ljgap_files_map *map);
 int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0, size_t *w,
                              size_t *h);
 
+/* The factor from a length unit ("m", "mm", "um", "µm", "~m", "nm", "pm", "A", ...) to
+ * metres, 0 when unit is not a length. */
+double ljgap_files_unit_scale(const char *unit);
+
 #endif

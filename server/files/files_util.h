@@ -19,8 +19,5 @@ int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_er
 void ljgap_files_add_channel(ljgap_files_map *map, const char *title);
 /* s[0..n) into out, trimmed, bytes outside printable ASCII as '?'. */
 void ljgap_files_text(char *out, size_t size, const char *s, size_t n);
-/* The factor from a length unit ("m", "mm", "um", "µm", "~m", "nm", "pm", "A", ...) to
- * metres, 0 when unit is not a length. */
-double ljgap_files_unit_scale(const char *unit);
 
 #endif
