@@ -56,6 +56,13 @@ static void names_of(char *out, size_t size, int ext)
     }
 }
 
+const ljgap_files_format *ljgap_files_detect(const unsigned char *buf, size_t len)
+{
+    for (const ljgap_files_format *const *f = registry; buf && len && *f; f++)
+        if ((*f)->probe(buf, len)) return *f;
+    return NULL;
+}
+
 void ljgap_files_names(char *out, size_t size)
 {
     names_of(out, size, 1);
@@ -251,9 +258,7 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
             return LJGAP_FILES_UNKNOWN;
         }
     } else {
-        for (const ljgap_files_format *const *g = registry; *g && !f; g++)
-            if (len && (*g)->probe(buf, len)) f = *g;
-        if (!f) {
+        if (!(f = ljgap_files_detect(buf, len))) {
             names_of(names, sizeof names, 0);
             snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %.160s",
                      names);

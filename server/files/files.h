@@ -86,6 +86,8 @@ extern const ljgap_files_format ljgap_files_nanoscope, ljgap_files_x3p, ljgap_fi
 /* ---- beside the readers: for the request layer, the CLI and the tests ---- */
 /* The format of that name (case-insensitive), or NULL. */
 const ljgap_files_format *ljgap_files_find(const char *name);
+/* The format whose probe recognises buf (the registry's order), or NULL. */
+const ljgap_files_format *ljgap_files_detect(const unsigned char *buf, size_t len);
 /* "name (extensions), ..." of every format read, into out (for 415 details and --help). */
 void ljgap_files_names(char *out, size_t size);
 /* The channel a request names (NULL or "": the height channel, by a title such as Height,
