@@ -265,7 +265,7 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
         goto end;
     }
     size_t nrest = split_params(params, nparams, rest, &format, &channel);
-    /* the query first: its problems are the request's whatever the file holds */
+    /* an unknown or repeated query parameter is refused before the file is read */
     if (!(query = ljgap_topo_params_json(rest, nrest, &ve))) {
         ljgap_ans_oom(out);
         goto end;
