@@ -72,19 +72,22 @@ static int read_gsf(const unsigned char *buf, size_t len, const char *channel,
     ljgap_files_add_channel(map, get(hdr, hlen, "Title", v, sizeof v) && v[0] ? v : "Data");
     if (ljgap_files_channel_pick(map, channel, err) < 0) return LJGAP_FILES_CHANNEL;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[0]);
-    if ((st = ljgap_files_alloc(map, (size_t)xres, (size_t)yres, err))) return st;
-    size_t N = map->nx * map->ny;
     ljgap_bytes b;
     ljgap_bytes_init(&b, buf, len);
     for (size_t i = hlen; i < data; i++)
         if (i < len && buf[i] != 0)
             return ljgap_files_fail(err, NAME, (long)i, NULL,
                                     "the header's NUL padding holds a byte that is not NUL");
+    /* the data checked before the map is allocated: a header cannot claim memory it lacks */
+    if ((unsigned long)xres > LJGAP_FILES_MAX_POINTS / (unsigned long)yres)
+        return ljgap_files_alloc(map, (size_t)xres, (size_t)yres, err);
+    size_t N = (size_t)xres * (size_t)yres;
     if (!ljgap_bytes_at(&b, data, 4 * N))
         return ljgap_files_fail(err, NAME, (long)len, NULL,
                                 "%zu floats need %zu bytes after the header at %zu, the file has "
                                 "%zu (truncated)",
                                 N, 4 * N, data, len);
+    if ((st = ljgap_files_alloc(map, (size_t)xres, (size_t)yres, err))) return st;
     ljgap_bytes_seek(&b, data);
     double zs = 1;
     if (get(hdr, hlen, "ZUnits", v, sizeof v)) {

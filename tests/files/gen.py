@@ -9,12 +9,14 @@ KIND: nanoscope16, nanoscope32 (three channels: Height, an amplitude in V, ZSens
 gwy (two channels, the first with a mask of a 4 x 3 hole), xyz (a hole of 5 points, lines
 shuffled). tests/files/run.sh runs each and compares; files2/files3 add their kinds here.
 """
+import os
 import struct
 import sys
 
 import numpy as np
 
-NX, NY = 40, 24  # not square: a transposed reader shows
+# not square: a transposed reader shows (GEN_NX, GEN_NY change it: the fuzz seeds are smaller)
+NX, NY = int(os.environ.get("GEN_NX", 40)), int(os.environ.get("GEN_NY", 24))
 
 
 def expected(path, fields, z):
@@ -37,13 +39,13 @@ def nanoscope(out, bpp):
     ]
     raws = [rng.integers(-int(top * r), int(top * r), size=(NY, NX), dtype=np.int64)
             for *_, r in images]
-    hdr_len = 8192
+    hdr_len = 4096
     offs, lines = [], []
     lines += ["\\*File list", f"\\Version: {'0x09200201' if bpp == 4 else '0x05120005'}", f"\\Data length: {hdr_len}",
               "\\Date: 02:44:18 PM Fri Sep 25 2009", "\\*Equipment list",
               "\\Microscope: Dimension Icon", "\\*Scanner list", "\\Serial Number: 1234",
               "\\@Sens. Zsens: V 18.3 nm/V", "\\@Sens. ZsensSens: V 2500.5 nm/V",
-              "\\*Ciao scan list", "\\Scan Size: 500 300 nm", "\\Samps/line: 40", "\\Lines: 24",
+              "\\*Ciao scan list", "\\Scan Size: 500 300 nm", f"\\Samps/line: {NX}", f"\\Lines: {NY}",
               "\\@Sens. Deflection: V 61.2 nm/V"]
     off = hdr_len
     for (title, q, zval, _, _), raw in zip(images, raws):
@@ -119,7 +121,7 @@ def gwy(out):
     h = rng.normal(0, 1e-8, size=(NY, NX))
     phase = rng.normal(0, 3, size=(NY, NX))
     mask = np.zeros((NY, NX))
-    mask[10:13, 20:24] = 1
+    mask[NY // 2 - 1:NY // 2 + 2, NX // 2:NX // 2 + 4] = 1
     comps = [gwy_comp("/0/data/title", "s", gwy_str("Phase")),
              gwy_comp("/0/data", "o", gwy_field(phase, 2e-6, 1.2e-6, "deg")),
              gwy_comp("/3/data", "o", gwy_field(h, 2e-6, 1.2e-6, "m")),
@@ -134,7 +136,7 @@ def gwy(out):
     z = h.copy()
     z[mask > 0.5] = np.nan
     expected(out, {"format": "gwy", "channel": "Height", "channels": "Phase|Height", "nx": NX,
-                   "ny": NY, "size_x": 2e-6, "size_y": 1.2e-6, "z_unit": "m", "missing": 12}, z)
+                   "ny": NY, "size_x": 2e-6, "size_y": 1.2e-6, "z_unit": "m", "missing": int(mask.sum())}, z)
 
 
 def xyz(out):
@@ -142,7 +144,7 @@ def xyz(out):
     rng = np.random.default_rng(11)
     dx, dy = 2.5e-8, 4e-8
     z = rng.normal(0, 1e-9, size=(NY, NX))
-    hole = [(3, 4), (3, 5), (4, 4), (4, 5), (9, 30)]
+    hole = [(3, 4), (3, 5), (4, 4), (4, 5), (NY - 2, NX - 3)]
     rows = []
     for j in range(NY):
         for i in range(NX):
