@@ -68,6 +68,7 @@ static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap_f
         if (s[0] != '\\')
             return ljgap_files_fail(err, NAME, (long)at, NULL,
                                     "a header line does not start with a backslash");
+        if (n < 2) continue; /* a lone backslash says nothing */
         if (n >= 15 && memcmp(s, "\\*File list end", 15) == 0) return 0;
         if (h->n >= MAX_LINES)
             return ljgap_files_fail(err, NAME, (long)at, NULL, "more than %d header lines",

@@ -144,6 +144,9 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
 void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_context,
                           enum MHD_ConnectionNotificationCode toe);
 void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap); /* MHD_OPTION_EXTERNAL_LOGGER */
+/* The types a text route (/v1/psd) takes, its Accept-Post: JSON, text, octet-stream and the
+ * instrument formats' own media types. */
+const char *ljgapd_text_types(void);
 
 /* ---- routes (routes.c) ---- */
 
@@ -176,7 +179,7 @@ typedef struct {
     int problem;        /* nonzero: answer a problem with this status and detail instead */
     char detail[256];   /* the problem's detail */
     const char *header; /* one extra header of either answer (Location, Retry-After), or NULL */
-    char value[160];    /* its value */
+    char value[400];    /* its value */
     char *key;          /* compute: the answer cache's key (owned), or NULL */
     size_t klen;        /* its length */
 } work_reply;

@@ -99,7 +99,7 @@ static void text_types_fill(void)
             k += (size_t)snprintf(text_types + k, sizeof text_types - k, ", %s", (*f)->media_type);
 }
 
-static const char *text_route_types(void)
+const char *ljgapd_text_types(void)
 {
     static pthread_once_t once = PTHREAD_ONCE_INIT;
     pthread_once(&once, text_types_fill);
@@ -247,7 +247,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
     if (clen) want = strtoull(clen, NULL, 10);
     if (!r->text && !r->file && !is_json_type(ctype)) {
         /* the type first: a body the route never takes is 415 whatever its size */
-        const char *types = r->route->text_max ? text_route_types() : "application/json";
+        const char *types = r->route->text_max ? ljgapd_text_types() : "application/json";
         r->close = want > 0; /* its body is not read */
         snprintf(detail, sizeof detail, "%s takes %.300s (Accept-Post), not %.40s", r->route->path,
                  types, ctype ? ctype : "a body without Content-Type");

@@ -277,6 +277,10 @@ static void psd_file_work(request *r, const volatile int *cancel, work_reply *ou
     ljgap_call call = {cancel, r->accept};
     ljgap_handle_file("psd", r->params, r->nparams, (const unsigned char *)r->body, r->len, &call,
                       &out->rep);
+    if (out->rep.status == 415) { /* no format read here: what the route takes */
+        out->header = "Accept-Post";
+        snprintf(out->value, sizeof out->value, "%s", ljgapd_text_types());
+    }
 }
 
 enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
