@@ -213,10 +213,11 @@ static const char *file_defaults(cJSON *query, const ljgap_files_map *m, size_t 
 
 /* The heights of the rectangle (x0, y0, w, h) of the map, each within ±HEIGHT_MAX; NULL with
  * a detail when one is not (else out of memory). */
-static double *crop(const ljgap_files_map *m, size_t x0, size_t y0, size_t w, size_t h,
-                    char *detail, size_t size)
+static double *crop(ljgap_files_map *m, size_t x0, size_t y0, size_t w, size_t h, char *detail,
+                    size_t size)
 {
-    double *z = malloc(w * h * sizeof *z);
+    /* the whole map: its heights are taken over, not copied */
+    double *z = w == m->nx && h == m->ny ? m->z : malloc(w * h * sizeof *z);
     if (!z) return NULL;
     for (size_t j = 0; j < h; j++)
         for (size_t i = 0; i < w; i++) {
@@ -226,11 +227,12 @@ static double *crop(const ljgap_files_map *m, size_t x0, size_t y0, size_t w, si
                          "the height at row %zu, column %zu of the file is %g m, outside "
                          "[-1e3, 1e3] m (is its unit right?)",
                          y0 + j, x0 + i, v);
-                free(z);
+                if (z != m->z) free(z);
                 return NULL;
             }
             z[j * w + i] = v;
         }
+    if (z == m->z) m->z = NULL; /* now the request's */
     return z;
 }
 
