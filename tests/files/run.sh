@@ -115,4 +115,25 @@ head -c 3000 /dev/urandom >"$tmp/noise.bin"
 printf '\x89PNG\r\n\x1a\n' | cat - "$tmp/noise.bin" >"$tmp/noise.png"
 check "a PNG is unknown (1)" sh -c "'$DUMP' '$tmp/noise.png' | grep -q '^error 1 '"
 check "an empty file is unknown (1)" sh -c ": >'$tmp/empty'; '$DUMP' '$tmp/empty' | grep -q '^error 1 '"
+# the command line: ljgap psd FILE recognises the file; a text matrix with --dx stays text
+LJGAP=$BUILD/ljgap
+if [ -x "$LJGAP" ]; then
+    "$LJGAP" psd "$tmp/gwy.gwy" >"$tmp/cli.json"
+    check "ljgap psd FILE.gwy: exit 0, the answer's source names the format and the mask's points" \
+        jq -e '.source.format == "gwy" and .source.channel == "Height" and .source.missing.count > 0
+            and (.meta.warnings | any(test("largest complete rectangle")))' "$tmp/cli.json"
+    "$LJGAP" psd --channel Phase "$tmp/nanoscope16.spm" >"$tmp/cli.json"
+    check "ljgap psd --channel NAME: a channel the file lacks is exit 1, 422 at /channel" \
+        sh -c "[ $? = 1 ] && jq -e '.errors[0].pointer == \"/channel\"' '$tmp/cli.json' >/dev/null"
+    "$LJGAP" psd --format gsf "$tmp/nanoscope16.spm" >"$tmp/cli.json"
+    check "ljgap psd --format: a file that is not that format is bad-file" \
+        jq -e '.type == "/problems/bad-file" and .format == "gsf"' "$tmp/cli.json"
+    awk 'BEGIN { for (j = 0; j < 16; j++) { for (i = 0; i < 16; i++) printf "%s%g", i ? " " : "",
+        1e-9 * sin(0.7 * i + 1.3 * j); print "" } }' >"$tmp/matrix.txt"
+    "$LJGAP" psd --dx 1e-8 "$tmp/matrix.txt" >"$tmp/cli.json"
+    check "ljgap psd --dx M FILE: a text matrix is still read as text (no source)" \
+        jq -e '.grid.nx == 16 and (has("source") | not)' "$tmp/cli.json"
+else
+    fail "$LJGAP is not built"
+fi
 echo "$n checks"
