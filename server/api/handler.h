@@ -38,7 +38,7 @@ int ljgap_handler_has(const char *endpoint);
 
 void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
                        const char *body, size_t len, const ljgap_call *call, ljgap_reply *out);
-/* ---- instrument files: psd's height map as a file (psd_file.c; server/files/ reads it) ----
+/* ---- instrument files: psd's height map as a file (psd.c; server/files/ reads it) ----
  * The body is the file's bytes (len of them), its format recognised by content; the query
  * parameters are the text upload's plus format (a format's name, forcing it) and channel (an
  * index or a title; default the height channel). dx, dy come from the file (the query gives

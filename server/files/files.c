@@ -5,15 +5,14 @@
  * text columns) last; the first that says yes reads it. A format name forces that reader
  * (its own checks then say whether the bytes are that format: 422 bad-file, not 415).
  *
- * What the readers share lives here too: the message of a failure (ljgap_files_fail), the
- * map's allocation against LJGAP_FILES_MAX_POINTS (ljgap_files_alloc), the choice of a
- * channel from the titles a reader found (ljgap_files_channel_pick: an index, a title, or the
- * height channel by its name), length units to metres (ljgap_files_unit_scale), the count of
- * missing points, and the largest complete rectangle of a map with holes, which is what the
- * PSD is computed on (docs/topography.md, "Instrument files").
+ * Here too: the choice of a channel from the titles a reader found (ljgap_files_channel_pick:
+ * an index, a title, or the height channel by its name), length units to metres
+ * (ljgap_files_unit_scale), the count of missing points, and the largest complete rectangle
+ * of a map with holes, which is what the PSD is computed on (docs/topography.md, "Instrument
+ * files"). What only the readers share (a failure's message, the map's allocation, channel
+ * titles) is files_util.c's.
  */
 #include "files.h"
-#include "files_util.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -68,59 +67,14 @@ void ljgap_files_names(char *out, size_t size)
     names_of(out, size, 1);
 }
 
-int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, const char *member,
-                     const char *fmt, ...)
+/* err's message and format (no offset, no member); LJGAP_FILES_BAD. */
+static int set_err(ljgap_files_err *err, const char *format, const char *fmt, const char *arg)
 {
-    va_list ap;
-    if (!err) return LJGAP_FILES_BAD;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
+    snprintf(err->msg, sizeof err->msg, fmt, arg);
     err->format = format;
-    err->offset = offset;
-    snprintf(err->member, sizeof err->member, "%s", member ? member : "");
+    err->offset = -1;
+    err->member[0] = '\0';
     return LJGAP_FILES_BAD;
-}
-
-int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err)
-{
-    if (nx == 0 || ny == 0)
-        return ljgap_files_fail(err, map->format, -1, NULL, "a map of %zu x %zu points", nx, ny);
-    if (nx > LJGAP_FILES_MAX_POINTS / ny) {
-        ljgap_files_fail(err, map->format, -1, NULL,
-                         "%zu x %zu points: more than the %u a map may have", nx, ny,
-                         LJGAP_FILES_MAX_POINTS);
-        return LJGAP_FILES_TOOBIG;
-    }
-    free(map->z);
-    if (!(map->z = malloc(nx * ny * sizeof *map->z))) {
-        snprintf(err->msg, sizeof err->msg, "out of memory for %zu x %zu points", nx, ny);
-        return LJGAP_FILES_NOMEM;
-    }
-    map->nx = nx;
-    map->ny = ny;
-    return 0;
-}
-
-void ljgap_files_add_channel(ljgap_files_map *map, const char *title)
-{
-    if (map->n_channels >= LJGAP_FILES_MAX_CHANNELS) return;
-    ljgap_files_text(map->channels[map->n_channels++], LJGAP_FILES_TEXT, title, strlen(title));
-}
-
-void ljgap_files_text(char *out, size_t size, const char *s, size_t n)
-{
-    size_t k = 0;
-    while (n && isspace((unsigned char)*s))
-        s++, n--;
-    while (n && (isspace((unsigned char)s[n - 1]) || s[n - 1] == '\0'))
-        n--;
-    /* printable ASCII and whole UTF-8 sequences kept; other bytes (Latin-1) become '?' */
-    for (size_t i = 0; i < n && k + 1 < size && s[i]; i++) {
-        unsigned char c = (unsigned char)s[i];
-        out[k++] = (c >= 0x20 && c < 0x7f) ? (char)c : '?';
-    }
-    out[k] = '\0';
 }
 
 /* Is the title one of a height channel's names? */
@@ -144,7 +98,7 @@ int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
     char list[LJGAP_FILES_MAX_CHANNELS * 24] = "";
     size_t k = 0;
     if (map->n_channels <= 0) {
-        ljgap_files_fail(err, map->format, -1, NULL, "the file holds no channel of data");
+        set_err(err, map->format, "%s", "the file holds no channel of data");
         return -1;
     }
     if (!channel || !*channel) {
@@ -268,13 +222,13 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
     map->format = f->name;
     err->format = f->name;
     st = len ? f->read(buf, len, channel && *channel ? channel : NULL, map, err)
-             : ljgap_files_fail(err, f->name, 0, NULL, "the file is empty");
+             : set_err(err, f->name, "%s", "the file is empty");
     if (st == 0 && (!map->z || !map->nx || !map->ny))
-        st = ljgap_files_fail(err, f->name, -1, NULL, "the reader found no data");
+        st = set_err(err, f->name, "%s", "the reader found no data");
     if (st == 0) {
         ljgap_files_count_missing(map);
         if (map->missing == map->nx * map->ny)
-            st = ljgap_files_fail(err, f->name, -1, NULL, "every point of the map is missing");
+            st = set_err(err, f->name, "%s", "every point of the map is missing");
     }
     if (st) {
         ljgap_files_map_free(map);

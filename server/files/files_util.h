@@ -1,6 +1,6 @@
-/* files_util.h -- what the readers of server/files/ share (files.c), besides bytes.h: the
- * message of a failure, the map's allocation, channel titles, units, and a text header's
- * lines. Not for the request layer (files.h is its interface).
+/* files_util.h -- what the readers of server/files/ share (files_util.c), besides bytes.h: the
+ * message of a failure, the map's allocation, channel titles. Not for the request layer
+ * (files.h is its interface).
  */
 #ifndef LJGAP_FILES_UTIL_H
 #define LJGAP_FILES_UTIL_H

@@ -289,7 +289,7 @@ enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
     if (r->file) {
         if (!r->task) {
             /* a file holds at most a point per 2 bytes (16-bit samples); the map and its
-             * cropped copy (psd_file.c) come on top of the text path's estimate */
+             * cropped copy (psd.c) come on top of the text path's estimate */
             size_t points = r->len / 2 + 1, cap = LJGAP_FILES_MAX_POINTS;
             if (points > cap) points = cap;
             r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);

@@ -1,5 +1,5 @@
 /* test_files.c -- the instrument-file readers (server/files/) and POST /v1/psd with a file
- * (server/api/psd_file.c).
+ * (server/api/psd.c, ljgap_handle_file).
  *
  * Small files are written here from each format's documentation (independently of
  * tests/files/gen.py, which writes others for the Gwyddion cross-check): a NanoScope file of two
