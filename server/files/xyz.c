@@ -4,8 +4,8 @@
  * semicolon; '#' and '%' start comments; lines of words before the first number (a header
  * such as "x y z") are skipped; "nan" as a height is a missing point. Two columns (x z) are a
  * profile. The grid is found, not assumed: the distinct x values (and y values) must lie on
- * one regular spacing (within 1e-4 of it), the spacing being the least gap between
- * neighbouring distinct values; a grid point no line gives is missing (NaN), a point given
+ * one regular spacing (within 1 % of it: exports round their coordinates), the spacing being
+ * the least gap between neighbouring distinct values; a grid point no line gives is missing (NaN), a point given
  * twice is an error, and a grid that the points would fill less than half is no grid (a
  * scattered point cloud, which is not read). Any order of the lines is accepted; rows of the
  * map are successive y values from the least.
@@ -24,7 +24,7 @@
 
 #define NAME "xyz"
 #define TOKEN_MAX 64
-#define GRID_TOL 1e-4  /* a value's distance from its grid point, in spacings */
+#define GRID_TOL 1e-2  /* a value's distance from its grid point, in spacings (exports round) */
 #define FILL_MIN 0.5   /* the points must fill at least this share of their grid */
 
 static int is_sep(char c)

@@ -301,6 +301,17 @@ static void xyz_grid_found(void **state)
     assert_true(fabs(m.size_x - 3e-6) < 1e-15 && fabs(m.size_y - 1.25e-6) < 1e-15);
     ljgap_files_map_free(&m);
     free(b.b);
+    /* coordinates rounded by the export (a spacing of 1/3 um written with 3 decimals) */
+    b = (buf){0};
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            putf(&b, "%.3f %.3f %g\n", i / 3.0, j / 3.0, height(i, j));
+    assert_int_equal(read_buf(&b, NULL, NULL, &m, &e), 0);
+    assert_int_equal(m.nx, 4);
+    assert_int_equal(m.ny, 4);
+    assert_int_equal(m.missing, 0);
+    ljgap_files_map_free(&m);
+    free(b.b);
     /* a point cloud is no grid; a point given twice is an error */
     b = (buf){0};
     for (int k = 0; k < 50; k++)
