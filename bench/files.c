@@ -53,8 +53,8 @@ int main(int argc, char **argv)
         }
         if (i == 0)
             printf("file: %s, %zu bytes, %s, %zu x %zu points, channel %s\n",
-                   strrchr(argv[1], '/') ? strrchr(argv[1], '/') + 1 : argv[1], len, m.format,
-                   m.nx, m.ny, m.channel);
+                   strrchr(argv[1], '/') ? strrchr(argv[1], '/') + 1 : argv[1], len, m.format, m.nx,
+                   m.ny, m.channel);
         ljgap_files_map_free(&m);
     }
     for (int i = 0; i < runs; i++) {

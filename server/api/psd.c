@@ -385,8 +385,8 @@ static void read_failed(ljgap_reply *out, int st, const ljgap_files_err *e)
 }
 
 /* "format" and "channel" out of the query (kept in *format, *channel); the rest into rest. */
-static size_t split_params(const ljgap_param *p, size_t np, ljgap_param *rest,
-                           const char **format, const char **channel)
+static size_t split_params(const ljgap_param *p, size_t np, ljgap_param *rest, const char **format,
+                           const char **channel)
 {
     size_t k = 0;
     *format = *channel = NULL;
@@ -462,8 +462,7 @@ static const char *file_defaults(cJSON *query, const ljgap_files_map *m, size_t 
             snprintf(detail, size,
                      "the %s file states its size, %g x %g m over %zu x %zu points (dx = %g m, "
                      "dy = %g m): leave out %s",
-                     m->format, m->size_x, m->size_y, m->nx, m->ny, dx, dy,
-                     has_dx ? "dx" : "dy");
+                     m->format, m->size_x, m->size_y, m->nx, m->ny, dx, dy, has_dx ? "dx" : "dy");
             return has_dx ? "/topography/dx" : "/topography/dy";
         }
         if (!default_num(topo, "dx", dx) || !default_num(topo, "dy", dy)) return "";

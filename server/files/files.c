@@ -80,8 +80,8 @@ static int set_err(ljgap_files_err *err, const char *format, const char *fmt, co
 /* Is the title one of a height channel's names? */
 static int is_height_title(const char *t)
 {
-    static const char *const words[] = {"height", "topograph", "zsensor", "z sensor", "z-sensor",
-                                        "surface", NULL};
+    static const char *const words[] = {"height",   "topograph", "zsensor", "z sensor",
+                                        "z-sensor", "surface",   NULL};
     char low[LJGAP_FILES_TEXT];
     size_t i = 0;
     for (; t[i] && i + 1 < sizeof low; i++)
@@ -92,8 +92,7 @@ static int is_height_title(const char *t)
     return 0;
 }
 
-int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
-                             ljgap_files_err *err)
+int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel, ljgap_files_err *err)
 {
     char list[LJGAP_FILES_MAX_CHANNELS * 24] = "";
     size_t k = 0;
@@ -119,8 +118,7 @@ int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
         if (n < 0) break;
         k += (size_t)n;
     }
-    snprintf(err->msg, sizeof err->msg, "no channel \"%.40s\": the file has %.180s", channel,
-             list);
+    snprintf(err->msg, sizeof err->msg, "no channel \"%.40s\": the file has %.180s", channel, list);
     err->format = map->format;
     err->offset = -1;
     err->member[0] = '\0';
@@ -132,10 +130,21 @@ double ljgap_files_unit_scale(const char *unit)
     static const struct {
         const char *name;
         double scale;
-    } units[] = {{"m", 1},          {"mm", 1e-3},     {"um", 1e-6},    {"~m", 1e-6},
-                 {"\xc2\xb5m", 1e-6}, {"\xb5m", 1e-6}, {"micron", 1e-6}, {"microns", 1e-6},
-                 {"nm", 1e-9},      {"pm", 1e-12},    {"A", 1e-10},    {"\xc3\x85", 1e-10},
-                 {"angstrom", 1e-10}, {"km", 1e3},    {"cm", 1e-2}};
+    } units[] = {{"m", 1},
+                 {"mm", 1e-3},
+                 {"um", 1e-6},
+                 {"~m", 1e-6},
+                 {"\xc2\xb5m", 1e-6},
+                 {"\xb5m", 1e-6},
+                 {"micron", 1e-6},
+                 {"microns", 1e-6},
+                 {"nm", 1e-9},
+                 {"pm", 1e-12},
+                 {"A", 1e-10},
+                 {"\xc3\x85", 1e-10},
+                 {"angstrom", 1e-10},
+                 {"km", 1e3},
+                 {"cm", 1e-2}};
     for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
         if (strcmp(unit, units[i].name) == 0) return units[i].scale;
     return 0;
@@ -194,8 +203,8 @@ void ljgap_files_map_free(ljgap_files_map *map)
     map->nx = map->ny = 0;
 }
 
-int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
-                     const char *channel, ljgap_files_map *map, ljgap_files_err *err)
+int ljgap_files_read(const unsigned char *buf, size_t len, const char *format, const char *channel,
+                     ljgap_files_map *map, ljgap_files_err *err)
 {
     const ljgap_files_format *f = NULL;
     char names[160];
@@ -214,8 +223,7 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
     } else {
         if (!(f = ljgap_files_detect(buf, len))) {
             names_of(names, sizeof names, 0);
-            snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %.160s",
-                     names);
+            snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %.160s", names);
             return LJGAP_FILES_UNKNOWN;
         }
     }

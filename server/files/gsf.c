@@ -51,8 +51,8 @@ static int get(const char *hdr, size_t n, const char *key, char *out, size_t siz
     return 0;
 }
 
-static int read_gsf(const unsigned char *buf, size_t len, const char *channel,
-                    ljgap_files_map *map, ljgap_files_err *err)
+static int read_gsf(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
 {
     const unsigned char *nul = memchr(buf, '\0', len);
     char v[LJGAP_FILES_TEXT], *end;
@@ -102,8 +102,10 @@ static int read_gsf(const unsigned char *buf, size_t len, const char *channel,
     double xreal = 0, yreal = 0, xs = 1;
     if (get(hdr, hlen, "XYUnits", v, sizeof v)) xs = ljgap_files_unit_scale(v);
     if (get(hdr, hlen, "XReal", v, sizeof v)) xreal = strtod(v, NULL);
-    if (get(hdr, hlen, "YReal", v, sizeof v)) yreal = strtod(v, NULL);
-    else yreal = xreal * (double)yres / (double)xres;
+    if (get(hdr, hlen, "YReal", v, sizeof v))
+        yreal = strtod(v, NULL);
+    else
+        yreal = xreal * (double)yres / (double)xres;
     if (xs > 0 && isfinite(xreal) && isfinite(yreal) && xreal > 0 && yreal > 0)
         map->size_x = xs * xreal, map->size_y = xs * yreal;
     return 0;

@@ -28,9 +28,9 @@
 #define MAX_FIELDS 64
 
 typedef struct {
-    int id;         /* N of /N/data */
-    size_t data;    /* offset of the GwyDataField's object */
-    size_t mask;    /* offset of /N/mask's object, 0 when none */
+    int id;      /* N of /N/data */
+    size_t data; /* offset of the GwyDataField's object */
+    size_t mask; /* offset of /N/mask's object, 0 when none */
     char title[LJGAP_FILES_TEXT];
 } field;
 
@@ -85,12 +85,27 @@ static int skip_value(ljgap_bytes *b, char t, int depth)
 {
     size_t one = 0;
     switch (t) {
-    case 'b': case 'c': one = 1; break;
-    case 'i': one = 4; break;
-    case 'q': case 'd': one = 8; break;
-    case 's': return cstr(b, NULL, 0);
-    case 'o': return skip_object(b, depth + 1);
-    case 'C': case 'I': case 'Q': case 'D': case 'S': case 'O': {
+    case 'b':
+    case 'c':
+        one = 1;
+        break;
+    case 'i':
+        one = 4;
+        break;
+    case 'q':
+    case 'd':
+        one = 8;
+        break;
+    case 's':
+        return cstr(b, NULL, 0);
+    case 'o':
+        return skip_object(b, depth + 1);
+    case 'C':
+    case 'I':
+    case 'Q':
+    case 'D':
+    case 'S':
+    case 'O': {
         uint32_t n = ljgap_bytes_u32(b, 0);
         if (b->bad) return -1;
         if (t == 'S' || t == 'O') {
@@ -121,9 +136,10 @@ static int channel_key(const char *k, int *id)
     long n = strtol(k + 1, &end, 10);
     if (n > 1000000) return 0;
     *id = (int)n;
-    return strcmp(end, "/data") == 0 ? 1 : strcmp(end, "/data/title") == 0 ? 2
-                                       : strcmp(end, "/mask") == 0      ? 3
-                                                                        : 0;
+    return strcmp(end, "/data") == 0         ? 1
+           : strcmp(end, "/data/title") == 0 ? 2
+           : strcmp(end, "/mask") == 0       ? 3
+                                             : 0;
 }
 
 static field *field_of(field *f, int *n, int id)
@@ -177,12 +193,18 @@ static int data_field(const unsigned char *buf, size_t len, size_t off, datafiel
     while (b.pos < end && !b.bad) {
         cstr(&b, name, sizeof name);
         char t = (char)ljgap_bytes_u8(&b);
-        if (t == 'i' && strcmp(name, "xres") == 0) d->xres = ljgap_bytes_i32(&b, 0);
-        else if (t == 'i' && strcmp(name, "yres") == 0) d->yres = ljgap_bytes_i32(&b, 0);
-        else if (t == 'd' && strcmp(name, "xreal") == 0) d->xreal = ljgap_bytes_f64(&b, 0);
-        else if (t == 'd' && strcmp(name, "yreal") == 0) d->yreal = ljgap_bytes_f64(&b, 0);
-        else if (t == 'o' && strcmp(name, "si_unit_xy") == 0) si_unit(&b, d->uxy, sizeof d->uxy);
-        else if (t == 'o' && strcmp(name, "si_unit_z") == 0) si_unit(&b, d->uz, sizeof d->uz);
+        if (t == 'i' && strcmp(name, "xres") == 0)
+            d->xres = ljgap_bytes_i32(&b, 0);
+        else if (t == 'i' && strcmp(name, "yres") == 0)
+            d->yres = ljgap_bytes_i32(&b, 0);
+        else if (t == 'd' && strcmp(name, "xreal") == 0)
+            d->xreal = ljgap_bytes_f64(&b, 0);
+        else if (t == 'd' && strcmp(name, "yreal") == 0)
+            d->yreal = ljgap_bytes_f64(&b, 0);
+        else if (t == 'o' && strcmp(name, "si_unit_xy") == 0)
+            si_unit(&b, d->uxy, sizeof d->uxy);
+        else if (t == 'o' && strcmp(name, "si_unit_z") == 0)
+            si_unit(&b, d->uz, sizeof d->uz);
         else if (t == 'D' && strcmp(name, "data") == 0) {
             d->ndata = ljgap_bytes_u32(&b, 0);
             d->data = b.pos;
@@ -205,8 +227,8 @@ static int data_field(const unsigned char *buf, size_t len, size_t off, datafiel
     return 0;
 }
 
-static int read_gwy(const unsigned char *buf, size_t len, const char *channel,
-                    ljgap_files_map *map, ljgap_files_err *err)
+static int read_gwy(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
 {
     field f[MAX_FIELDS];
     int nf = 0, id, st, pick;
@@ -279,8 +301,8 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel,
         }
         if (m.xres != d.xres || m.yres != d.yres) {
             ljgap_files_fail(err, NAME, (long)f[pick].mask, name,
-                             "the mask has %ld x %ld points, its channel %ld x %ld", m.xres,
-                             m.yres, d.xres, d.yres);
+                             "the mask has %ld x %ld points, its channel %ld x %ld", m.xres, m.yres,
+                             d.xres, d.yres);
             return LJGAP_FILES_BAD;
         }
         ljgap_bytes_seek(&b, m.data);

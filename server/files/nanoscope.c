@@ -283,18 +283,20 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
             ljgap_files_add_channel(map, v);
         }
     if (!n_img) {
-        st = ljgap_files_fail(err, NAME, -1, NULL, "the header lists no image (\\*Ciao image list)");
+        st =
+            ljgap_files_fail(err, NAME, -1, NULL, "the header lists no image (\\*Ciao image list)");
         goto end;
     }
     /* a file cut short is bad even where it cuts a channel not asked for */
     for (int i = 0; i < n_img; i++) {
         long long o = number(&h, images[i], "Data offset"), w = number(&h, images[i], "Samps/line"),
-                  r = number(&h, images[i], "Number of lines"), p = number(&h, images[i], "Bytes/pixel");
+                  r = number(&h, images[i], "Number of lines"),
+                  p = number(&h, images[i], "Bytes/pixel");
         if (o >= 0 && w > 0 && r > 0 && w <= 65536 && r <= 65536 &&
             (unsigned long long)o + (unsigned long long)(w * r * (p == 4 ? 4 : 2)) > len) {
             st = ljgap_files_fail(err, NAME, (long)len, NULL,
-                                  "image %d \"%s\" ends at byte %lld, the file has %zu (truncated)", i,
-                                  map->channels[i], o + w * r * (p == 4 ? 4 : 2), len);
+                                  "image %d \"%s\" ends at byte %lld, the file has %zu (truncated)",
+                                  i, map->channels[i], o + w * r * (p == 4 ? 4 : 2), len);
             goto end;
         }
     }
@@ -344,7 +346,8 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
     for (long long j = 0; j < ny; j++) {
         double *row = map->z + (size_t)(ny - 1 - j) * (size_t)nx;
         for (long long i = 0; i < nx; i++)
-            row[i] = q * (bpp == 2 ? (double)ljgap_bytes_i16(&b, 0) : (double)ljgap_bytes_i32(&b, 0));
+            row[i] =
+                q * (bpp == 2 ? (double)ljgap_bytes_i16(&b, 0) : (double)ljgap_bytes_i32(&b, 0));
     }
     if ((L = find(&h, -2, "Date"))) {
         value(L, v, sizeof v);
@@ -360,5 +363,5 @@ end:
     return st;
 }
 
-const ljgap_files_format ljgap_files_nanoscope = {
-    NAME, ".spm .000 .001 .di", NULL, probe, read_nanoscope};
+const ljgap_files_format ljgap_files_nanoscope = {NAME, ".spm .000 .001 .di", NULL, probe,
+                                                  read_nanoscope};

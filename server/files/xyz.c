@@ -5,10 +5,10 @@
  * such as "x y z") are skipped; "nan" as a height is a missing point. Two columns (x z) are a
  * profile. The grid is found, not assumed: the distinct x values (and y values) must lie on
  * one regular spacing (within 1 % of it: exports round their coordinates), the spacing being
- * the least gap between neighbouring distinct values; a grid point no line gives is missing (NaN), a point given
- * twice is an error, and a grid that the points would fill less than half is no grid (a
- * scattered point cloud, which is not read). Any order of the lines is accepted; rows of the
- * map are successive y values from the least.
+ * the least gap between neighbouring distinct values; a grid point no line gives is missing
+ * (NaN), a point given twice is an error, and a grid that the points would fill less than half
+ * is no grid (a scattered point cloud, which is not read). Any order of the lines is accepted;
+ * rows of the map are successive y values from the least.
  *
  * Units: the columns carry none; x, y and z are taken to be metres (z_unit "m"), and the size
  * is the grid's nx dx by ny dy. A file in other units must be converted first (or its PSD
@@ -24,8 +24,8 @@
 
 #define NAME "xyz"
 #define TOKEN_MAX 64
-#define GRID_TOL 1e-2  /* a value's distance from its grid point, in spacings (exports round) */
-#define FILL_MIN 0.5   /* the points must fill at least this share of their grid */
+#define GRID_TOL 1e-2 /* a value's distance from its grid point, in spacings (exports round) */
+#define FILL_MIN 0.5  /* the points must fill at least this share of their grid */
 
 static int is_sep(char c)
 {
@@ -137,8 +137,8 @@ static const char *grid(const double *v, size_t n, size_t stride, double *x0, do
     return NULL;
 }
 
-static int read_xyz(const unsigned char *buf, size_t len, const char *channel,
-                    ljgap_files_map *map, ljgap_files_err *err)
+static int read_xyz(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
+                    ljgap_files_err *err)
 {
     double *v = NULL;
     size_t n = 0, cap = 0, p = 0, line = 0;
@@ -154,9 +154,8 @@ static int read_xyz(const unsigned char *buf, size_t len, const char *channel,
         if ((k = numbers(s, m, x, &nan)) == 0) continue;
         if (k < 0 && !n) continue; /* a header line before the numbers */
         if (k < 0 || k < 2 || k > 3 || (cols && k != cols) || (nan && nan != k)) {
-            st = ljgap_files_fail(err, NAME, (long)at, NULL,
-                                  "line %zu is not %s numbers (x%s z)", line,
-                                  cols == 2 ? "2" : "3", cols == 2 ? "" : " y");
+            st = ljgap_files_fail(err, NAME, (long)at, NULL, "line %zu is not %s numbers (x%s z)",
+                                  line, cols == 2 ? "2" : "3", cols == 2 ? "" : " y");
             goto end;
         }
         cols = k;

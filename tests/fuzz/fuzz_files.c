@@ -91,7 +91,8 @@ static void check_answer(const ljgap_reply *r)
         if (!cJSON_IsString(cJSON_GetObjectItem(s, "format"))) breach("200 without source.format");
     } else if (r->status == 422 || r->status == 413 || r->status == 415) {
         const cJSON *t = cJSON_GetObjectItem(a, "type");
-        if (!cJSON_IsString(t)) breach("a problem without type");
+        if (!cJSON_IsString(t))
+            breach("a problem without type");
         else if (!strcmp(t->valuestring, "/problems/bad-file") &&
                  !cJSON_IsString(cJSON_GetObjectItem(a, "format")))
             breach("bad-file without its format");

@@ -44,7 +44,10 @@ static void put(buf *o, const void *p, size_t n)
     memcpy(o->b + o->n, p, n);
     o->n += n;
 }
-static void puts_(buf *o, const char *s) { put(o, s, strlen(s) + 1); } /* with its NUL */
+static void puts_(buf *o, const char *s)
+{
+    put(o, s, strlen(s) + 1);
+} /* with its NUL */
 static void putf(buf *o, const char *fmt, ...)
 {
     char s[512];
@@ -95,13 +98,15 @@ static buf nanoscope(int16_t raw[2][NY][NX])
     putf(&h, "\\Date: 11:05:00 AM Tue Mar 05 2013\r\n\\*Scanner list\r\n");
     putf(&h, "\\@Sens. Zsens: V 20 nm/V\r\n");
     for (int c = 0; c < 2; c++) {
-        putf(&h, "\\*Ciao image list\r\n\\Data offset: %zu\r\n\\Data length: %zu\r\n",
-             hdr + c * n, n);
+        putf(&h, "\\*Ciao image list\r\n\\Data offset: %zu\r\n\\Data length: %zu\r\n", hdr + c * n,
+             n);
         putf(&h, "\\Bytes/pixel: 2\r\n\\Samps/line: %d\r\n\\Number of lines: %d\r\n", NX, NY);
         putf(&h, "\\Scan Size: 2 1.7 ~m\r\n");
-        putf(&h, c ? "\\@2:Image Data: S [Phase] \"Phase\"\r\n\\@2:Z scale: V (0.001 V/LSB) 65.536 V\r\n"
-                   : "\\@2:Image Data: S [Height] \"Height\"\r\n"
-                     "\\@2:Z scale: V [Sens. Zsens] (0.0001 V/LSB) 6.5536 V\r\n");
+        putf(
+            &h,
+            c ? "\\@2:Image Data: S [Phase] \"Phase\"\r\n\\@2:Z scale: V (0.001 V/LSB) 65.536 V\r\n"
+              : "\\@2:Image Data: S [Height] \"Height\"\r\n"
+                "\\@2:Z scale: V [Sens. Zsens] (0.0001 V/LSB) 6.5536 V\r\n");
     }
     putf(&h, "\\*File list end\r\n");
     put(&o, h.b, h.n);
@@ -122,8 +127,9 @@ static buf nanoscope(int16_t raw[2][NY][NX])
 static buf gsf(size_t nx, size_t ny, int (*hole)(size_t, size_t))
 {
     buf o = {0};
-    putf(&o, "Gwyddion Simple Field 1.0\nXRes = %zu\nYRes = %zu\nXReal = %.17g\nYReal = %.17g\n"
-             "XYUnits = m\nZUnits = m\nTitle = Height\n",
+    putf(&o,
+         "Gwyddion Simple Field 1.0\nXRes = %zu\nYRes = %zu\nXReal = %.17g\nYReal = %.17g\n"
+         "XYUnits = m\nZUnits = m\nTitle = Height\n",
          nx, ny, nx * 1e-8, ny * 1e-8);
     size_t pad = 4 - o.n % 4;
     put(&o, "\0\0\0\0", pad);
@@ -234,7 +240,10 @@ static void nanoscope_read_exactly(void **state)
     free(b.b);
 }
 
-static int gsf_hole(size_t i, size_t j) { return i == 3 && j == 5; }
+static int gsf_hole(size_t i, size_t j)
+{
+    return i == 3 && j == 5;
+}
 
 static void gsf_read_exactly(void **state)
 {
@@ -288,7 +297,8 @@ static void xyz_grid_found(void **state)
     /* columns in reverse order, a missing point at (2, 1), spacing 0.5 um by 0.25 um */
     for (int j = 4; j >= 0; j--)
         for (int i = 5; i >= 0; i--)
-            if (!(i == 2 && j == 1)) putf(&b, "%.6e, %.6e, %.17g\n", 1e-3 + i * 5e-7, j * 2.5e-7, height(i, j));
+            if (!(i == 2 && j == 1))
+                putf(&b, "%.6e, %.6e, %.17g\n", 1e-3 + i * 5e-7, j * 2.5e-7, height(i, j));
     put(&b, "", 1);
     b.n--; /* text, no NUL */
     assert_int_equal(read_buf(&b, NULL, NULL, &m, &e), 0);
@@ -353,7 +363,10 @@ static void registry_and_detection(void **state)
 }
 
 /* the hole: rows 20 to 25 entirely (a band), and one point at (50, 60) */
-static int band_hole(size_t i, size_t j) { return (j >= 20 && j < 26) || (i == 50 && j == 60); }
+static int band_hole(size_t i, size_t j)
+{
+    return (j >= 20 && j < 26) || (i == 50 && j == 60);
+}
 
 static void largest_rectangle(void **state)
 {
@@ -464,9 +477,9 @@ int main(void)
 {
     gsl_set_error_handler_off();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(registry_and_detection), cmocka_unit_test(nanoscope_read_exactly),
-        cmocka_unit_test(gsf_read_exactly),       cmocka_unit_test(gwy_read_exactly),
-        cmocka_unit_test(xyz_grid_found),         cmocka_unit_test(largest_rectangle),
+        cmocka_unit_test(registry_and_detection),   cmocka_unit_test(nanoscope_read_exactly),
+        cmocka_unit_test(gsf_read_exactly),         cmocka_unit_test(gwy_read_exactly),
+        cmocka_unit_test(xyz_grid_found),           cmocka_unit_test(largest_rectangle),
         cmocka_unit_test(psd_of_a_map_with_a_hole), cmocka_unit_test(file_problems),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
