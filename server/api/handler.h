@@ -44,7 +44,7 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
  * index or a title; default the height channel). dx, dy come from the file (the query gives
  * them only for a file that states no size). The answer is psd's with "source" (what the file
  * said); problems: 415 no format read here, 422 bad-file (format, offset or member), 422 at
- * /channel, 413 a map over the server's cap. call may be NULL. */
+ * /channel or /format, 413 a map over the server's cap. call may be NULL. */
 void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t nparams,
                        const unsigned char *body, size_t len, const ljgap_call *call,
                        ljgap_reply *out);

@@ -301,9 +301,10 @@ int ljgap_run_psd(job *j)
  * warning says it too. A cropped map is not periodic.
  *
  * Problems: 415 unsupported-media-type listing the formats read (no reader recognises the
- * bytes, or format= names none), 422 bad-file with the format and the byte offset or member
- * (a recognised file cut short or corrupt), 422 validation at /channel (no such channel, or a
- * channel that is no height), 413 content-too-large (a map over the server's cap of points).
+ * bytes), 422 validation at /format (format= names no format read here), 422 bad-file with the
+ * format and the byte offset or member (a recognised file cut short or corrupt), 422 validation at
+ * /channel (no such channel, or a channel that is no height), 413 content-too-large (a map over the
+ * server's cap of points).
  */
 
 #define HEIGHT_MAX 1e3 /* |height| in m, as request_topo.c's */
@@ -352,13 +353,10 @@ static void read_failed(ljgap_reply *out, int st, const ljgap_files_err *e)
     switch (st) {
     case LJGAP_FILES_UNKNOWN:
         ljgap_files_names(names, sizeof names);
-        if (strncmp(e->msg, "no format", 9) == 0)
-            snprintf(detail, sizeof detail, "%s", e->msg);
-        else
-            snprintf(detail, sizeof detail,
-                     "the body is no file of a format read here (recognised by its content): "
-                     "%s; a height matrix as text goes as text/plain",
-                     names);
+        snprintf(detail, sizeof detail,
+                 "the body is no file of a format read here (recognised by its content): "
+                 "%s; a height matrix as text goes as text/plain",
+                 names);
         file_problem(out, "unsupported-media-type", detail, NULL);
         return;
     case LJGAP_FILES_BAD:
@@ -545,6 +543,14 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
     }
     if (ve.n) {
         ljgap_ans_invalid(out, &ve);
+        goto end;
+    }
+    if (format && *format && !ljgap_files_find(format)) {
+        char names[600];
+        ljgap_files_names(names, sizeof names);
+        snprintf(detail, sizeof detail, "no format \"%.32s\": the formats read are %s", format,
+                 names);
+        one_error(out, "/format", detail);
         goto end;
     }
     if ((st = ljgap_files_read(body, len, format, channel, &m, &e))) {

@@ -75,7 +75,7 @@ YReal = 1.6e-7
 gen psd-file-gsf-cut-short "psd 422 - $OCT" < <(gsf16 "XReal = 1.6e-7
 " 1000)
 gen psd-file-unknown-format "psd 415 - $OCT" < <(printf 'GIF89a\x10\x00\x10\x00\x80\x00\x00')
-gen psd-file-format-no-such "psd?format=pdf 415 - $OCT" <"$tmp/gsf16"
+gen psd-file-format-no-such "psd?format=pdf 422 /format $OCT" <"$tmp/gsf16"
 gen psd-file-channel-no-such "psd?channel=Phase 422 /channel $OCT" <"$tmp/gsf16"
 gen psd-file-channel-index-out "psd?channel=3 422 /channel $OCT" <"$tmp/gsf16"
 gen psd-file-dx-beside-size "psd?dx=1e-9 422 /topography/dx $OCT" <"$tmp/gsf16"

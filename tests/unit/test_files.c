@@ -449,7 +449,8 @@ static void file_problems(void **state)
     assert_non_null(strstr(cJSON_GetObjectItem(a, "detail")->valuestring, "gsf (.gsf)"));
     cJSON_Delete(a), ljgap_reply_free(&r);
     ljgap_handle_file("psd", fm, 1, b.b, b.n, NULL, &r);
-    a = answer(&r, 415);
+    a = answer(&r, 422);
+    assert_non_null(strstr(r.body, "\"pointer\":\"/format\""));
     cJSON_Delete(a), ljgap_reply_free(&r);
     ljgap_handle_file("psd", NULL, 0, b.b, b.n - 7, NULL, &r);
     a = answer(&r, 422);
