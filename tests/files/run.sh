@@ -75,6 +75,14 @@ for entry in "${KINDS[@]}"; do
         "$PY" $T/gwy_dump.py "$f" >"$f.ref" 2>&1
         check "$kind: agrees point by point with the independent gwy_dump.py" \
             "$PY" $T/compare.py "$f.got" "$f.ref" nx ny size_x size_y missing channel channels
+        # and Gwyddion reads the generated file as we do (it writes it out again, mask and all)
+        if [ $have_gwyddion = 1 ]; then
+            (cd "$tmp" && timeout 120 env -u DISPLAY gwyddion --convert-to-gwy="$kind.gwyddion.gwy" \
+                "$kind.$ext") >/dev/null 2>&1
+            "$PY" $T/gwy_dump.py "$tmp/$kind.gwyddion.gwy" >"$f.ref2" 2>&1
+            check "$kind: Gwyddion loads the generated file and agrees point by point" \
+                "$PY" $T/compare.py "$f.got" "$f.ref2" nx ny size_x size_y missing channel
+        fi
         ;;
     gwyddion)
         if [ $have_gwyddion = 0 ]; then
