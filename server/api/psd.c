@@ -50,7 +50,7 @@ void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double 
 {
     cJSON *o = ljgap_ans_put(j, j->ans, "psd", cJSON_CreateObject());
     int tail = isfinite(q);
-    ljgap_psd psd;
+    ljgap_psd psd = {0}; /* ljgap_psd_table leaves it untouched when it refuses the table */
     *m0 = NAN;
     ljgap_ans_put(j, o, "kind", cJSON_CreateString("table"));
     ljgap_ans_nums(j, o, "k", k, n, sizeof *k, "psd.k");
