@@ -130,7 +130,7 @@ static void value(const line *L, char *out, size_t size)
     out[n] = '\0';
 }
 
-/* A whole number at key in section sec, or -1. */
+/* A whole number at key in section sec, or -1 (absent, negative or absurd). */
 static long long number(const header *h, int sec, const char *key)
 {
     const line *L = find(h, sec, key);
@@ -138,7 +138,9 @@ static long long number(const header *h, int sec, const char *key)
     if (!L) return -1;
     value(L, v, sizeof v);
     long long x = strtoll(v, &end, 10);
-    return end != v && x >= 0 ? x : -1;
+    /* beyond 2^48 (256 TiB) no offset, length or count is real: as absent, so no sum of them
+     * overflows */
+    return end != v && x >= 0 && x <= (1LL << 48) ? x : -1;
 }
 
 /* "\@Sens. Zsens: V 18.3 nm/V": the factor 18.3 and the unit nm (hard unit V); 0 when bad. */
