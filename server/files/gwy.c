@@ -292,6 +292,9 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel, l
     for (size_t i = 0; i < map->nx * map->ny; i++) {
         double z = ljgap_bytes_f64(&b, 0);
         map->z[i] = isfinite(z) ? (zs > 0 ? zs : 1) * z : NAN;
+        if (isinf(map->z[i]))
+            return ljgap_files_fail(err, NAME, (long)(d.data + 8 * i), name,
+                                    "a height of %g %s overflows in metres", z, d.uz);
     }
     if (f[pick].mask) {
         snprintf(name, sizeof name, "/%d/mask", f[pick].id);

@@ -248,6 +248,9 @@ static int z_scale(const header *h, int sec, int bpp, ljgap_files_map *map, doub
     double to_m = ljgap_files_unit_scale(unit);
     ljgap_files_text(map->z_unit, sizeof map->z_unit, unit, strlen(unit));
     *q = hard * soft * (to_m > 0 ? to_m : 1);
+    if (!isfinite(*q * 2147483648.0))
+        return ljgap_files_fail(err, NAME, (long)L->where, NULL,
+                                "the Z scale times its sensitivity, %g, overflows", *q);
     return 0;
 }
 
