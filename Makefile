@@ -66,7 +66,8 @@ SOMAJOR := $(firstword $(subst ., ,$(VERSION)))
 # core/: the numerical library; core/sim/ the discrete numerical model and the hybrid; core/topo/
 # measured topographies' PSDs
 CORE_SRC := $(wildcard core/*.c core/sim/*.c core/topo/*.c)
-# server/: the request layer (api/: the handler, validation, answers, CSV, problems) and the job
+# server/: the request layer (api/: the handler, validation, answers, CSV, problems), the
+# instrument-file readers (files/) and the job
 # store (jobs/), in one archive; the CLI (cli/) and the daemon (ljgapd/) link it.
 SERVER_SRC := $(wildcard server/api/*.c server/uncert/*.c server/jobs/*.c server/files/*.c)
 # The daemon's own files (server/ljgapd/): all but main.c also go into an archive that the unit
@@ -100,7 +101,7 @@ CFLAGS ?= $(OPT) -g
 WARN := -Wall -Wextra -Wshadow -Wpointer-arith -Wstrict-prototypes -Wmissing-prototypes \
         -Wno-unused-parameter
 ALL_CFLAGS := -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -Icore -Icore/sim -Icore/topo \
-              -Iserver/api -Iserver/uncert -Iserver/jobs -Iserver/ljgapd -Iserver/files \
+              -Iserver/api -Iserver/uncert -Iserver/jobs -Iserver/files -Iserver/ljgapd \
               $(PKG_CFLAGS) -MMD -MP
 LDLIBS := $(EXTRA_LIBS) $(PKG_LIBS) -lpthread -lm
 ALL_LDFLAGS := $(LDFLAGS) $(SANFLAGS)

@@ -24,6 +24,13 @@
  * binary file is refused here in one line; a refused map empties the card. The card says what
  * it was "computed for" (files, dx, dy, periodic, detrend, material) and marks that line once
  * one of those inputs changes.
+ *
+ * An instrument's own file (issue 28: NanoScope, .gwy, .gsf, xyz columns, X3P, … chosen or
+ * dropped on the card) goes as application/octet-stream with the same query but dx and dy, which
+ * the file gives (sent only when the server says the file states no size); the server recognises
+ * the format. Its answer's source fills a channel selector (a change sends the file again with
+ * channel=) and the readout says what the file said: format, channel, instrument, date, size,
+ * unit and the missing points (the PSD is that of their largest complete rectangle).
  */
 "use strict";
 
@@ -35,13 +42,57 @@ const LJTopo = (() => {
   let measured = []; /* several files: [{name, answer}] of /v1/psd, psd the combination */
   const COLORS = ["#1f5fbf", "#2e933c", "#8e44ad", "#e67e22", "#16a085", "#7f8c8d", "#c0392b", "#2c3e50"];
 
+  /* An instrument's file, not a text matrix: by its extension, a binary start or a format's
+   * text magic. */
+  const INSTRUMENT_EXT = /\.(spm|000|001|002|003|di|gwy|gsf|xyz|x3p|sur|nc|ibw|tiff?|plu)$/i;
+  async function isInstrument(f) {
+    if (INSTRUMENT_EXT.test(f.name)) return true;
+    const b = new Uint8Array(await f.slice(0, 4096).arrayBuffer());
+    const head = new TextDecoder("latin1").decode(b.slice(0, 32));
+    return b.includes(0) || head.startsWith("\\*File list") || head.startsWith("Gwyddion Simple Field");
+  }
+
+  /* The query of an instrument file: what the text upload's has but dx, dy (given only when
+   * withDx: the file states no size), and the channel chosen. */
+  function fileQuery(withDx, material) {
+    const q = new URLSearchParams(query(undefined, material));
+    if (!withDx) q.delete("dx"), q.delete("dy");
+    const ch = $("topo-channel");
+    if (ch && !ch.hidden && ch.value !== "") q.set("channel", ch.value);
+    return q.toString();
+  }
+
+  /* The channel selector from an answer's source (hidden with one channel or none). */
+  function channels(source) {
+    const sel = $("topo-channel");
+    const box = $("topo-channel-field");
+    if (!sel || !box) return;
+    const list = source ? source.channels : [];
+    box.hidden = list.length < 2;
+    sel.replaceChildren(...list.map((t, i) => api.el("option", { value: String(i) }, `${i}: ${t}`)));
+    if (source) sel.value = String(Math.max(0, list.indexOf(source.channel)));
+  }
+
+  /* What the file said (an answer's source), one line for the readout. */
+  function sourceLine(s) {
+    const size = s.size ? `${api.fmt(s.size[0], 4)} × ${api.fmt(s.size[1], 4)} m` : "no size stated";
+    const parts = [`file: ${s.format}, channel "${s.channel}"${s.channels.length > 1 ? ` of ${s.channels.length}` : ""}`,
+      `${s.nx} × ${s.ny} points, ${size}`, `heights in ${s.z_unit || "m (no unit stated)"}`];
+    if (s.instrument) parts.push(`instrument ${s.instrument}`);
+    if (s.acquired) parts.push(`acquired ${s.acquired}`);
+    if (s.tip_radius) parts.push(`tip radius ${api.fmt(s.tip_radius, 3)} m`);
+    const u = s.missing.used;
+    parts.push(s.missing.count ? `${s.missing.count} points missing: the PSD is that of the largest complete rectangle, ${u.nx} × ${u.ny} from column ${u.x0}, row ${u.y0}` : "no point missing");
+    return parts.join("; ");
+  }
+
   /* The query of the text upload: dx, dy, periodic and the material, as the form has them. */
-  function query(dx) {
+  function query(dx, material) {
     const q = new URLSearchParams();
     q.set("dx", dx === undefined ? $("topo-dx").value.trim() : dx);
     if (dx === undefined && $("topo-dy").value.trim() !== "") q.set("dy", $("topo-dy").value.trim());
     if ($("topo-periodic").checked) q.set("periodic", "true");
-    const m = dx === undefined ? api.materialObject() : null; /* several maps: the whole band */
+    const m = dx === undefined || material ? api.materialObject() : null; /* several maps: the whole band */
     for (const [k, v] of Object.entries(m || {})) if (v !== undefined && v !== null) q.set(k, String(v));
     return q.toString();
   }
@@ -55,6 +106,8 @@ const LJTopo = (() => {
       parts.push(files.map((f, i) => `${f.name} (dx = ${$(`topo-dx-${i}`) ? $(`topo-dx-${i}`).value.trim() : $("topo-dx").value.trim()} m)`).join(", "));
     } else {
       parts.push(files.length ? files[0].name : "no file");
+      const ch = $("topo-channel");
+      if (ch && !$("topo-channel-field").hidden) parts.push(`channel ${ch.value}`);
       parts.push(`dx = ${$("topo-dx").value.trim()} m`);
       parts.push(`dy = ${$("topo-dy").value.trim() === "" ? "dx" : `${$("topo-dy").value.trim()} m`}`);
     }
@@ -165,6 +218,7 @@ const LJTopo = (() => {
     const notes = [`${g.nx} × ${g.ny} heights, ${g.periodic ? "periodic (mean removed, no window)" : `${g.detrend} removed, Hann window`}; bins ${api.fmt(a.k[0], 4)} … ${api.fmt(a.k[a.k.length - 1], 4)} 1/m`];
     if (a.domain) notes.push(`theory's domain k > k0/χ = ${api.fmt(a.domain.k0, 4)} 1/m: ${a.domain.inside} of the band; proposed k1 = ${api.fmt(a.domain.k1, 4)} 1/m (k̃1 = ${api.fmt(a.domain.k1_dimensionless, 4)})`);
     else notes.push("give a material above to see the theory's domain and compute the adhesion");
+    if (a.source) notes.unshift(sourceLine(a.source));
     $("readout-topo").replaceChildren(t, ...notes.map((n) => api.el("div", { class: "meta" }, n)), forLine(g.periodic ? "mean removed" : `${g.detrend} removed, Hann window`), api.metaLine(a), ...api.warnings(a));
     markStale();
   }
@@ -192,9 +246,9 @@ const LJTopo = (() => {
   async function notText(f) {
     if (f.size === 0) return `not a height map: ${f.name} is empty`;
     const b = new Uint8Array(await f.slice(0, 4096).arrayBuffer());
-    const magic = [[[0x89, 0x50, 0x4e, 0x47], "a PNG image"], [[0xff, 0xd8, 0xff], "a JPEG image"], [[0x49, 0x49, 0x2a, 0x00], "a TIFF file"], [[0x4d, 0x4d, 0x00, 0x2a], "a TIFF file"], [[0x50, 0x4b, 0x03, 0x04], "a ZIP archive"], [[0x25, 0x50, 0x44, 0x46], "a PDF"]];
-    for (const [m, what] of magic) if (m.every((x, i) => b[i] === x)) return `not a height map: ${f.name} is ${what}; export the heights as text (one row a line)`;
-    if (b.includes(0)) return `not a height map: ${f.name} is a binary file; export the heights as text (one row a line)`;
+    /* images and documents; any other binary may be an instrument's file (the server says) */
+    const magic = [[[0x89, 0x50, 0x4e, 0x47], "a PNG image"], [[0xff, 0xd8, 0xff], "a JPEG image"], [[0x25, 0x50, 0x44, 0x46], "a PDF"]];
+    for (const [m, what] of magic) if (m.every((x, i) => b[i] === x)) return `not a height map: ${f.name} is ${what}; export the heights as text (one row a line) or send the instrument's own file`;
     return null;
   }
 
@@ -233,9 +287,38 @@ const LJTopo = (() => {
   /* One height map f to /v1/psd as text with the query q (ask's answer); the export records
    * the upload (its file and query), not the matrix itself. */
   async function upload(p, f, q, label, who) {
+    if (await isInstrument(f)) return uploadFile(p, f, q, label, who);
     const text = await f.text();
     p.requests.push({ endpoint: `psd?${q}`, text: JSON.stringify({ file: f.name, bytes: text.length, content_type: "text/plain", query: q }), label });
     return ask(p, "psd", text, { contentType: "text/plain", query: q }, who);
+  }
+
+  /* An instrument file f to /v1/psd as application/octet-stream: first without dx (the file
+   * gives it), again with the form's dx when the server says the file states no size. */
+  async function uploadFile(p, f, q, label, who) {
+    const material = !!new URLSearchParams(q).get("dgamma");
+    for (const withDx of [false, true]) {
+      const fq = fileQuery(withDx, material);
+      p.requests.push({ endpoint: `psd?${fq}`, text: JSON.stringify({ file: f.name, bytes: f.size, content_type: "application/octet-stream", query: fq }), label });
+      let res;
+      try {
+        res = await api.post("psd", f, undefined, { contentType: "application/octet-stream", query: fq });
+      } catch (e) {
+        api.setIdle(`Request failed: ${e.message}`, true);
+        return null;
+      }
+      const j = res.json || {};
+      const noSize = res.status === 422 && (j.errors || []).some((e) => e.pointer === "/topography/dx" && /does not state its physical size/.test(e.detail));
+      if (noSize && !withDx) continue;
+      p.answers.push(j);
+      if (res.status === 200) {
+        channels(j.source);
+        return j;
+      }
+      refused(res.status, who ? { ...j, detail: `${who}: ${j.detail || ""}` } : j);
+      return null;
+    }
+    return null;
   }
 
   async function computePsd() {
@@ -520,7 +603,25 @@ const LJTopo = (() => {
     $("topo-compute").addEventListener("click", computePsd);
     $("topo-adhesion").addEventListener("click", computeAdhesion);
     $("topo-use").addEventListener("click", useIt);
-    $("topo-file").addEventListener("change", listFiles);
+    $("topo-file").addEventListener("change", () => {
+      channels(null); /* a new file: its own channels come with its answer */
+      listFiles();
+    });
+    $("topo-channel").addEventListener("change", computePsd);
+    /* a file dropped on the card is the file chosen */
+    const card = $("topo-card");
+    card.addEventListener("dragover", (e) => {
+      e.preventDefault();
+      card.classList.add("drop");
+    });
+    card.addEventListener("dragleave", () => card.classList.remove("drop"));
+    card.addEventListener("drop", (e) => {
+      e.preventDefault();
+      card.classList.remove("drop");
+      if (!e.dataTransfer || !e.dataTransfer.files.length) return;
+      $("topo-file").files = e.dataTransfer.files;
+      $("topo-file").dispatchEvent(new Event("change", { bubbles: true }));
+    });
     $("topo-combined-csv").addEventListener("click", () => {
       if (psd && measured.length) api.download("ljgap-topo-combined.csv", new Blob([combinedCSV()], { type: "text/csv" }));
     });
@@ -529,5 +630,5 @@ const LJTopo = (() => {
     for (const ev of ["input", "change"]) document.addEventListener(ev, () => computedFor !== null && markStale());
   }
 
-  return { init, spectrum, cut, query, refused, psdObject, combinedCSV, psdCSV, notText, inputsLine };
+  return { init, spectrum, cut, query, fileQuery, refused, psdObject, combinedCSV, psdCSV, notText, isInstrument, sourceLine, inputsLine };
 })();

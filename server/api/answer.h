@@ -95,6 +95,13 @@ void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_ke
 /* prefix, then the warnings of w, into buf. */
 void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
 
+/* The 422 validation problem of ve's errors (taken) into *out. */
+void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve);
+/* Runs a validated request j with run and answers it in form (0 JSON, 1 endpoint's CSV) into
+ * *out, meta timed from t0 (j->rq stays the caller's to free). */
+void ljgap_ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+                       const ljgap_call *call, double t0, ljgap_reply *out);
+
 /* psd.c: the runner of psd */
 int ljgap_run_psd(job *j);
 /* combine.c: the runner of psd/combine */

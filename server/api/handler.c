@@ -695,7 +695,7 @@ static cJSON *parse_body(const char *body, size_t len, size_t *where)
 
 /* The 422 validation problem of ve's problems (500 when recording them ran out of memory);
  * takes ve->errors. */
-static void reply_invalid(ljgap_reply *out, ljgap_verr *ve)
+void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve)
 {
     char detail[DETAIL_LEN];
     if (ve->oom) {
@@ -736,7 +736,7 @@ int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, 
         goto end;
     }
     if (ljgap_request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
-        reply_invalid(out, &ve);
+        ljgap_ans_invalid(out, &ve);
         goto end;
     }
     ok = 1;
@@ -772,7 +772,7 @@ static int form_of(const char *endpoint, const ljgap_call *call, ljgap_reply *ou
 
 /* Runs a validated request and answers it in form (0 JSON, 1 the CSV of endpoint; j->rq is
  * the caller's to free). */
-static void run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+void ljgap_ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
                     const ljgap_call *call, double t0, ljgap_reply *out)
 {
     int st;
@@ -825,7 +825,7 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
     }
     if ((form = form_of(r->name, call, out)) < 0) goto end;
     if (ljgap_ans_validate(r->ep, body, len, &j, out))
-        run_job(&j, r->run, r->name, form, call, t0, out);
+        ljgap_ans_run_job(&j, r->run, r->name, form, call, t0, out);
 end:
     ljgap_request_free(&j.rq);
 }
@@ -866,9 +866,9 @@ void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t n
     if (!(query = ljgap_topo_params_json(params, nparams, &ve))) ve.oom = 1;
     if (!ve.oom) ljgap_request_parse_text(query, &heights, &limits, &j.rq, &ve);
     if (ve.n || ve.oom)
-        reply_invalid(out, &ve);
+        ljgap_ans_invalid(out, &ve);
     else
-        run_job(&j, ljgap_run_psd, endpoint, form, call, t0, out);
+        ljgap_ans_run_job(&j, ljgap_run_psd, endpoint, form, call, t0, out);
     cJSON_Delete(query);
     cJSON_Delete(ve.errors);
     free(heights.h);

@@ -38,6 +38,16 @@ int ljgap_handler_has(const char *endpoint);
 
 void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
                        const char *body, size_t len, const ljgap_call *call, ljgap_reply *out);
+/* ---- instrument files: psd's height map as a file (psd.c; server/files/ reads it) ----
+ * The body is the file's bytes (len of them), its format recognised by content; the query
+ * parameters are the text upload's plus format (a format's name, forcing it) and channel (an
+ * index or a title; default the height channel). dx, dy come from the file (the query gives
+ * them only for a file that states no size). The answer is psd's with "source" (what the file
+ * said); problems: 415 no format read here, 422 bad-file (format, offset or member), 422 at
+ * /channel or /format, 413 a map over the server's cap. call may be NULL. */
+void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t nparams,
+                       const unsigned char *body, size_t len, const ljgap_call *call,
+                       ljgap_reply *out);
 /* Does this endpoint take a text upload ("psd")? */
 int ljgap_handler_has_text(const char *endpoint);
 

@@ -49,12 +49,26 @@ static const ljgap_problem_doc docs[] = {
      "sweep values. Thin out a measured spectrum or a height map before sending it; for a "
      "simulation, a smaller n. The server's operator can raise --max-memory."},
     {"unsupported-media-type", 415, "Unsupported media type",
-     "The body was not declared as a type the path takes. Compute requests must say "
-     "Content-Type: application/json (curl's -d alone sends "
-     "application/x-www-form-urlencoded); /v1/psd also takes a height matrix as text/plain "
-     "or text/csv. The Accept-Post header of the answer lists the types.",
+     "The body was not declared as a type the path takes, or /v1/psd was sent a file of no "
+     "format it reads. Compute requests must say Content-Type: application/json (curl's -d "
+     "alone sends application/x-www-form-urlencoded); /v1/psd also takes a height matrix as "
+     "text/plain or text/csv, and an instrument file as application/octet-stream (NanoScope, "
+     "X3P, .sur, .gwy, .gsf, netCDF, MetroPro .dat, .ibw, Park .tiff, .plu, xyz columns), "
+     "recognised by its content. The Accept-Post header lists the types; for a file, the "
+     "detail lists the formats read.",
      "Add the header Content-Type: application/json (curl -H 'Content-Type: "
-     "application/json'), or one of the types in Accept-Post."},
+     "application/json'), or one of the types in Accept-Post. For an instrument file, export "
+     "it from the instrument's software in one of the formats listed (Gwyddion converts "
+     "many others to .gwy or .gsf)."},
+    {"bad-file", 422, "Unreadable instrument file",
+     "The body is an instrument file of a format /v1/psd reads (the problem's format member "
+     "names it), but it cannot be read: it is cut short (a truncated upload), or corrupt or "
+     "inconsistent (a header whose grid does not fit its data, a value that is no number). "
+     "The problem's offset member gives the byte where reading failed, or member the part of "
+     "a container (a zip member of X3P, a GWY container member).",
+     "Send the whole file as it was written (curl --data-binary @FILE, not -d, which strips "
+     "line ends); check that the upload was not cut short; open the file in the instrument's "
+     "software or in Gwyddion and export it again. If format= forced a format, check it."},
     {"validation", 422, "Invalid request",
      "The body is valid JSON but some values are not: a missing or unknown field, a wrong "
      "type, a number out of range, a spectrum outside the theory (k1 at or below k0 = "

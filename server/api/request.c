@@ -683,6 +683,8 @@ void ljgap_request_free(ljgap_request *rq)
     rq->psd.k = rq->psd.P = rq->psd.P_err = rq->x = rq->topo.h = NULL;
     ljgap_combine_spec_free(rq->combine);
     rq->combine = NULL;
+    cJSON_Delete(rq->source);
+    rq->source = NULL;
 }
 
 int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)

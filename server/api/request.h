@@ -100,6 +100,8 @@ typedef struct {
     ljgap_topo_spec topo;  /* psd: the height map */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
     struct ljgap_combine_spec *combine; /* psd/combine: the PSDs (owned, combine.c) */
+    cJSON *source;         /* psd of an instrument file: the answer's "source" (owned; psd.c
+                            * moves it into the answer), else NULL */
 } ljgap_request;
 
 /* Collected validation problems. */

@@ -7,6 +7,10 @@
  *                         heights in m; POST /v1/psd with text/plain): the options are the
  *                         query parameters (--NAME VALUE or --NAME=VALUE; --periodic alone
  *                         means periodic=true), handed to ljgap_handle_text
+ *   ljgap psd [--format NAME] [--channel C] [--NAME VALUE ...] FILE
+ *                         the PSD of an instrument file (NanoScope, .gwy, .gsf, xyz columns,
+ *                         ...: server/files/), its format recognised by content (POST /v1/psd
+ *                         with application/octet-stream), handed to ljgap_handle_file
  *   ljgap simulations [FILE]   run one numerical-model job in the foreground (the body of
  *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
  *                         a progress bar when it is a terminal (nothing otherwise, so logs and
@@ -24,6 +28,7 @@
  * ljgap_handle_text. The manual page is man/ljgap.1.
  */
 #include "csv.h"
+#include "files.h" /* ljgap_files_detect: is the file an instrument's? */
 #include "handler.h"
 #include "ljgap.h"
 
@@ -41,6 +46,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: ljgap [--csv] NAME [FILE]\n"
             "       ljgap psd --dx M [--dy M] [--periodic] [--NAME VALUE ...] [FILE]\n"
+            "       ljgap psd [--format NAME] [--channel C] [--NAME VALUE ...] FILE\n"
             "       ljgap combine [--points-per-decade G] [--request] FILE FILE ...\n"
             "       ljgap --help | --version\n"
             "Reads a JSON request for endpoint NAME (adhesion, traction, pdf, sweep, contact,\n"
@@ -50,6 +56,9 @@ static void usage(FILE *f)
             "parameters of POST /v1/psd: dx, dy (m, default dx), periodic, detrend (mean,\n"
             "plane, lines, curvature), tip_radius, resolution (m), fit_k_min, fit_k_max (1/m),\n"
             "and a material's E_star (or E1, nu1, E2, nu2), dgamma, epsilon.\n"
+            "An instrument file (NanoScope, .gwy, .gsf, xyz columns, ...) is recognised by\n"
+            "its content: its grid, size and unit come from it; --channel picks a channel\n"
+            "(index or title; default the height channel), --format forces a format.\n"
             "combine makes one PSD of several measurements of one surface (POST\n"
             "/v1/psd/combine): each FILE is a /v1/psd answer or a psd object (k, P, P_err);\n"
             "the request is printed instead with --request.\n"
@@ -167,6 +176,23 @@ static int text_options(int argc, char **argv, ljgap_param *params, const char *
         n++;
     }
     return n;
+}
+
+/* Is body an instrument file for psd (rather than a JSON request or a text matrix)? With
+ * --format or --channel, always; else when a reader recognises it, except that xyz columns
+ * beside a --dx are a text matrix of three columns, and a JSON object stays a request. */
+static int is_instrument_file(const char *body, size_t len, const ljgap_param *p, int np)
+{
+    const ljgap_files_format *f;
+    int dx = 0;
+    for (int i = 0; i < np; i++) {
+        if (!strcmp(p[i].name, "format") || !strcmp(p[i].name, "channel")) return 1;
+        dx |= !strcmp(p[i].name, "dx");
+    }
+    size_t k = strspn(body, " \t\r\n");
+    if (np < 0 && k < len && body[k] == '{') return 0;
+    f = ljgap_files_detect((const unsigned char *)body, len);
+    return f && !(dx && !strcmp(f->name, "xyz"));
 }
 
 /* ljgap combine [--points-per-decade G] [--request] FILE FILE ...: the answer (or with
@@ -287,7 +313,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "ljgap: cannot read the request: %s\n", strerror(errno));
         goto end;
     }
-    if (nparams >= 0) {
+    if (strcmp(argv[1], "psd") == 0 && is_instrument_file(body, len, params, nparams)) {
+        ljgap_handle_file(argv[1], params, nparams > 0 ? (size_t)nparams : 0,
+                          (const unsigned char *)body, len, &call, &rep);
+    } else if (nparams >= 0) {
         ljgap_handle_text(argv[1], params, (size_t)nparams, body, len, &call, &rep);
     } else if (strcmp(argv[1], "simulations") == 0) {
         run_simulation(body, len, &rep);

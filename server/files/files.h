@@ -83,4 +83,27 @@ extern const ljgap_files_format ljgap_files_nanoscope, ljgap_files_x3p, ljgap_fi
     ljgap_files_gwy, ljgap_files_gsf, ljgap_files_netcdf, ljgap_files_metropro, ljgap_files_ibw,
     ljgap_files_park_tiff, ljgap_files_plu, ljgap_files_xyz;
 
+/* ---- beside the readers: for the request layer, the CLI and the tests ---- */
+/* The format of that name (case-insensitive), or NULL. */
+const ljgap_files_format *ljgap_files_find(const char *name);
+/* The format whose probe recognises buf (the registry's order), or NULL. */
+const ljgap_files_format *ljgap_files_detect(const unsigned char *buf, size_t len);
+/* "name (extensions), ..." of every format read, into out (for 415 details and --help). */
+void ljgap_files_names(char *out, size_t size);
+/* The channel a request names (NULL or "": the height channel, by a title such as Height,
+ * Topography, ZSensor; else channel 0), among map->channels: its index, or -1 with err->msg
+ * listing the channels. Readers call it once their titles are in map->channels. */
+int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
+                             ljgap_files_err *err);
+/* Counts the NaN of map->z into map->missing (and returns it). */
+size_t ljgap_files_count_missing(ljgap_files_map *map);
+/* The largest rectangle of complete (non-NaN) points: its first column x0, first row y0,
+ * width w and height h (all 0 when every point is missing); -1 when out of memory. */
+int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0, size_t *w,
+                             size_t *h);
+
+/* The factor from a length unit ("m", "mm", "um", "µm", "~m", "nm", "pm", "A", ...) to
+ * metres, 0 when unit is not a length. */
+double ljgap_files_unit_scale(const char *unit);
+
 #endif

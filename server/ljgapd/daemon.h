@@ -122,7 +122,8 @@ typedef struct {
     size_t cap;                   /* bytes allocated for body */
     size_t limit;                 /* the body's limit: cfg.max_body, or the route's text_max */
     int text;                     /* the body is text/plain or text/csv (a text route) */
-    ljgap_param *params;          /* a text body's query parameters (owned, decoded), or NULL */
+    int file;                     /* the body is an instrument file (a text route; files.h) */
+    ljgap_param *params;          /* a text or file body's query parameters (owned, decoded) */
     size_t nparams;               /* entries in params */
     int too_large;                /* the body outgrew its limit: answer 413 */
     int no_memory;                /* the body outgrew the memory budget: answer 503 */
@@ -143,6 +144,9 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
 void ljgapd_on_connection(void *cls, struct MHD_Connection *c, void **socket_context,
                           enum MHD_ConnectionNotificationCode toe);
 void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap); /* MHD_OPTION_EXTERNAL_LOGGER */
+/* The types a text route (/v1/psd) takes, its Accept-Post: JSON, text, octet-stream and the
+ * instrument formats' own media types. */
+const char *ljgapd_text_types(void);
 
 /* ---- routes (routes.c) ---- */
 
@@ -154,8 +158,10 @@ struct route {
     const char *allow;               /* allowed methods, the Allow header of a 405 */
     int takes_body;                  /* read a JSON body before answering */
     route_fn answer;                 /* writes the response (called again after a resume) */
-    size_t text_max;                 /* also takes a text/plain or text/csv body of at most this
-                                      * many bytes, with its query (0: JSON only) */
+    size_t text_max;                 /* also takes a text/plain or text/csv body, or an
+                                      * instrument file (application/octet-stream or a format's
+                                      * own type), of at most this many bytes, with its query
+                                      * (0: JSON only) */
 };
 
 /* The kinds of job the daemon runs (one: "simulation"), for ljgap_jobs_alloc. */
@@ -173,7 +179,7 @@ typedef struct {
     int problem;        /* nonzero: answer a problem with this status and detail instead */
     char detail[256];   /* the problem's detail */
     const char *header; /* one extra header of either answer (Location, Retry-After), or NULL */
-    char value[160];    /* its value */
+    char value[400];    /* its value */
     char *key;          /* compute: the answer cache's key (owned), or NULL */
     size_t klen;        /* its length */
 } work_reply;
@@ -191,7 +197,8 @@ void ljgapd_work_release(request *r);
 /* POST /v1/NAME: the cache, else a compute slot. */
 enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r);
 int ljgapd_compute_exists(const char *rest);
-/* POST /v1/psd: JSON as ljgapd_route_compute; a text body (a height matrix) with its query on a
+/* POST /v1/psd: JSON as ljgapd_route_compute; a text body (a height matrix) or an instrument
+ * file (ljgap_handle_file) with its query on a
  * compute slot, not cached. */
 enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r);
 

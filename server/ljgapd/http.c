@@ -15,9 +15,10 @@
  *   - bodies: body routes must say Content-Type: application/json (else 415 with Accept-Post,
  *     decided before the size) and carry at most --max-body bytes (413, decided from
  *     Content-Length before reading, or while reading a chunked body, when the buffer would
- *     grow past the limit). A route with text_max also takes text/plain or text/csv up to that
+ *     grow past the limit). A route with text_max also takes text/plain or text/csv, or an
+ *     instrument file (application/octet-stream or a format's own type, files.h), up to that
  *     many bytes; its query parameters are copied then (decoded by libmicrohttpd) for the work
- *     on a compute slot, and its values are counted as they arrive (memest.h).
+ *     on a compute slot, and a text's values are counted as they arrive (memest.h).
  *   - memory: a body's bytes are reserved in the budget's share for bodies (budget.h) before
  *     they are read: from Content-Length at the first call (one that does not fit is answered
  *     503 + Retry-After unread, and the connection closed, as for 413; one larger than the
@@ -31,6 +32,7 @@
  *     at most one of a kind per second: a flood of refused connections cannot flood the log.
  */
 #include "daemon.h"
+#include "files.h" /* the instrument formats' media types */
 #include "forwarded.h"
 
 #include <arpa/inet.h>
@@ -67,6 +69,41 @@ static int is_text_type(const char *ct)
     n = strcspn(ct, "; \t");
     return (n == 10 && strncasecmp(ct, "text/plain", 10) == 0) ||
            (n == 8 && strncasecmp(ct, "text/csv", 8) == 0);
+}
+
+/* Is it an instrument file's type: application/octet-stream or a format's own (files.h)? */
+static int is_file_type(const char *ct)
+{
+    size_t n;
+    if (!ct) return 0;
+    ct += strspn(ct, " \t");
+    n = strcspn(ct, "; \t");
+    if (n == 24 && strncasecmp(ct, "application/octet-stream", 24) == 0) return 1;
+    for (const ljgap_files_format *const *f = ljgap_files_formats(); *f; f++)
+        if ((*f)->media_type && strlen((*f)->media_type) == n &&
+            strncasecmp(ct, (*f)->media_type, n) == 0)
+            return 1;
+    return 0;
+}
+
+/* What a text route's Accept-Post says: JSON, text, octet-stream and the formats' own types
+ * (written once: the registry is fixed). */
+static char text_types[400];
+
+static void text_types_fill(void)
+{
+    size_t k = (size_t)snprintf(text_types, sizeof text_types,
+                                "application/json, text/plain, text/csv, application/octet-stream");
+    for (const ljgap_files_format *const *f = ljgap_files_formats(); *f; f++)
+        if ((*f)->media_type && k + strlen((*f)->media_type) + 3 < sizeof text_types)
+            k += (size_t)snprintf(text_types + k, sizeof text_types - k, ", %s", (*f)->media_type);
+}
+
+const char *ljgapd_text_types(void)
+{
+    static pthread_once_t once = PTHREAD_ONCE_INIT;
+    pthread_once(&once, text_types_fill);
+    return text_types;
 }
 
 /* Is it application/json or application/...+json (parameters allowed)? */
@@ -181,7 +218,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
 {
     const char *clen, *ctype;
     unsigned long long want = 0;
-    char detail[200];
+    char detail[420];
 
     if (ljgapd_srv.cfg.trust_proxy) {
         if (!conns_client_enter(ljgapd_srv.conns, r->client, ljgapd_srv.cfg.client_connections)) {
@@ -204,15 +241,15 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
 
     ctype = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
     r->text = r->route->text_max && is_text_type(ctype);
-    r->limit = r->text ? r->route->text_max : ljgapd_srv.cfg.max_body;
+    r->file = r->route->text_max && !r->text && is_file_type(ctype);
+    r->limit = r->text || r->file ? r->route->text_max : ljgapd_srv.cfg.max_body;
     clen = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (clen) want = strtoull(clen, NULL, 10);
-    if (!r->text && !is_json_type(ctype)) {
+    if (!r->text && !r->file && !is_json_type(ctype)) {
         /* the type first: a body the route never takes is 415 whatever its size */
-        const char *types =
-            r->route->text_max ? "application/json, text/plain, text/csv" : "application/json";
+        const char *types = r->route->text_max ? ljgapd_text_types() : "application/json";
         r->close = want > 0; /* its body is not read */
-        snprintf(detail, sizeof detail, "%s takes %s (Accept-Post), not %.40s", r->route->path,
+        snprintf(detail, sizeof detail, "%s takes %.300s (Accept-Post), not %.40s", r->route->path,
                  types, ctype ? ctype : "a body without Content-Type");
         return ljgapd_respond_problem(c, r, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, detail, "Accept-Post",
                                       types);
@@ -221,7 +258,7 @@ static enum MHD_Result request_begin(struct MHD_Connection *c, request *r, const
         r->close = 1;
         return ljgapd_respond_too_large(c, r);
     }
-    if (r->text && query_copy(c, r)) return MHD_NO;
+    if ((r->text || r->file) && query_copy(c, r)) return MHD_NO;
     if (want) {
         /* reserved before a byte is read: a body that does not fit is refused unread */
         size_t need = (size_t)want + 1;

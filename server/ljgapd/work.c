@@ -27,6 +27,7 @@
  * bodies (ljgapd_compute_memory_max), is 413 at once. Cached answers need none.
  */
 #include "daemon.h"
+#include "files.h" /* LJGAP_FILES_MAX_POINTS */
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -270,10 +271,33 @@ static void psd_text_work(request *r, const volatile int *cancel, work_reply *ou
                       &out->rep);
 }
 
+/* On a compute slot: an instrument file (files.h), not cached. */
+static void psd_file_work(request *r, const volatile int *cancel, work_reply *out)
+{
+    ljgap_call call = {cancel, r->accept};
+    ljgap_handle_file("psd", r->params, r->nparams, (const unsigned char *)r->body, r->len, &call,
+                      &out->rep);
+    if (out->rep.status == 415) { /* no format read here: what the route takes */
+        out->header = "Accept-Post";
+        snprintf(out->value, sizeof out->value, "%s", ljgapd_text_types());
+    }
+}
+
 enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
 {
-    if (!r->text) return ljgapd_route_compute(c, r);
     enum MHD_Result ret;
+    if (r->file) {
+        if (!r->task) {
+            /* a file holds at most a point per 2 bytes (16-bit samples); the map and its
+             * cropped copy (psd.c) come on top of the text path's estimate */
+            size_t points = r->len / 2 + 1, cap = LJGAP_FILES_MAX_POINTS;
+            if (points > cap) points = cap;
+            r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+            if (over_budget(c, r, ljgap_memest_psd_text(points) + 16 * points, &ret)) return ret;
+        }
+        return ljgapd_route_offload(c, r, ljgapd_srv.slots, psd_file_work, NULL, 0);
+    }
+    if (!r->text) return ljgapd_route_compute(c, r);
     if (!r->task) {
         size_t values = r->tokens.tokens, cap = LJGAP_TOPO_POINTS_DEFAULT;
         r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);

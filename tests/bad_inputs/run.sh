@@ -10,7 +10,8 @@
 # default is application/json), then the body, byte for byte, up to the end of the file.
 # ENDPOINT may carry a query (psd?dx=1e-8&periodic): a text/plain or text/csv case is a text
 # upload, which the CLI gets as options (--dx=1e-8 --periodic=; a case without a query is left
-# to the daemon: the CLI reads text only when given options).
+# to the daemon: the CLI reads text only when given options); an application/octet-stream case
+# is an instrument file, which the CLI reads by content (its query as options).
 # The big cases (deep nesting, giant arrays, over 1 MiB) are written here instead of committed.
 #   BUILD=build/h-harden tests/bad_inputs/run.sh
 #   WRAP="valgrind --error-exitcode=99 ..." tests/bad_inputs/run.sh   (daemon under a wrapper;
@@ -56,6 +57,35 @@ awk -v p="$PSD" 'BEGIN { printf "{%s,\"vary\":\"m0\",\"values\":[", p; for (i = 
     printf "%s", (i ? " 1" : "1"); printf "\n" } }' |
     gen psd-text-over-the-points-cap 'psd?dx=1e-8 422 /topography/heights text/plain'
 
+# instrument files (issue 28): a GSF of 16 x 16 floats, 1 and 2 m alternating (Gwyddion Simple
+# Field: header, NUL padding to a multiple of 4, little-endian floats), whole and broken
+gsf16() { # gsf16 HEADER-LINES BYTES: the header, then the first BYTES bytes of the data
+    local h="Gwyddion Simple Field 1.0
+XRes = 16
+YRes = 16
+$1"
+    printf '%s' "$h"
+    head -c $((4 - ${#h} % 4)) /dev/zero
+    for _ in $(seq 128); do printf '\x00\x00\x80\x3f\x00\x00\x00\x40'; done | head -c "$2"
+}
+OCT=application/octet-stream
+gsf16 "XReal = 1.6e-7
+YReal = 1.6e-7
+" 1024 >"$tmp/gsf16"
+gen psd-file-gsf-cut-short "psd 422 - $OCT" < <(gsf16 "XReal = 1.6e-7
+" 1000)
+gen psd-file-unknown-format "psd 415 - $OCT" < <(printf 'GIF89a\x10\x00\x10\x00\x80\x00\x00')
+gen psd-file-format-no-such "psd?format=pdf 422 /format $OCT" <"$tmp/gsf16"
+gen psd-file-channel-no-such "psd?channel=Phase 422 /channel $OCT" <"$tmp/gsf16"
+gen psd-file-channel-index-out "psd?channel=3 422 /channel $OCT" <"$tmp/gsf16"
+gen psd-file-dx-beside-size "psd?dx=1e-9 422 /topography/dx $OCT" <"$tmp/gsf16"
+gen psd-file-no-size-no-dx "psd 422 /topography/dx $OCT" < <(gsf16 "" 1024)
+gen psd-file-unknown-param "psd?bogus=1 422 /bogus $OCT" <"$tmp/gsf16"
+gen psd-file-nanoscope-no-end "psd 422 - $OCT" < <(printf '\\*File list\r\n\\Version: 0x05120005\r\n')
+gen psd-file-gwy-size-past-end "psd 422 - $OCT" < <(printf 'GWYP%s\x00\xff\xff\xff\x7f/0/data' GwyContainer)
+gen psd-file-xyz-scattered "psd 422 - $OCT" < <(printf '0 0 1\n0.3 0.1 2\n0.7 0.35 1\n1 1 3\n')
+gen psd-file-empty "psd 415 - $OCT" </dev/null
+
 # ---- the daemon ----
 if ! start d; then
     echo "not ok - ljgapd did not start: $(head -c 300 "$tmp/d.err")"
@@ -99,6 +129,12 @@ for f in tests/bad_inputs/cases/*.req "$tmp"/gen/*.req; do
         [[ $ep == *\?* ]] || continue
         IFS='&' read -ra kv <<<"${ep#*\?}"
         for a in "${kv[@]}"; do cli+=("--$a"); done
+        ;;
+    application/octet-stream) # an instrument file: ljgap psd [--OPTION ...] FILE
+        if [[ $ep == *\?* ]]; then
+            IFS='&' read -ra kv <<<"${ep#*\?}"
+            for a in "${kv[@]}"; do cli+=("--$a"); done
+        fi
         ;;
     esac
     "$CLI" "${cli[@]}" "$tmp/request" >"$tmp/answer" 2>/dev/null

@@ -90,6 +90,16 @@ const TABLE = (k0, n) => {
   const P = k.map((x, i) => 1e-30 * x ** -3.4 * (1 + 0.05 * Math.sin(3 * i)));
   return { kind: "table", k, P, P_err: P.map((x) => 0.1 * x) };
 };
+// A Gwyddion Simple Field of the matrix m (rows of heights in m, spacing 1e-8 m): its header,
+// NUL padding to a multiple of 4, then little-endian floats (Gwyddion's user guide, "GSF").
+function gsf(m) {
+  const ny = m.length, nx = m[0].length;
+  let head = `Gwyddion Simple Field 1.0\nXRes = ${nx}\nYRes = ${ny}\nXReal = ${nx * 1e-8}\nYReal = ${ny * 1e-8}\nXYUnits = m\nZUnits = m\n`;
+  head += "\0".repeat(4 - (head.length % 4));
+  const data = Buffer.alloc(4 * nx * ny);
+  m.flat().forEach((v, i) => data.writeFloatLE(v, 4 * i));
+  return Buffer.concat([Buffer.from(head, "latin1"), data]);
+}
 const heights = (nx, ny) =>
   Array.from({ length: ny }, (_, j) => Array.from({ length: nx }, (_, i) => 1e-9 * Math.sin(0.7 * i + 1.3 * j) + 3e-10 * Math.cos(0.31 * i * j)));
 const compute = {
@@ -160,6 +170,21 @@ async function computations() {
   check("a height matrix as text/csv with a material", "POST", "/v1/psd?dx=1e-8&E_star=1e9&dgamma=0.05&epsilon=3e-10",
     await call("POST", "/v1/psd?dx=1e-8&E_star=1e9&dgamma=0.05&epsilon=3e-10", { headers: { "Content-Type": "text/csv" }, body: rows.replaceAll(" ", ",") }), { status: 200 });
   check("a text upload without dx", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: { "Content-Type": "text/plain" }, body: rows }), { status: 422 });
+  // an instrument file (issue 28): a Gwyddion Simple Field, its grid and size in its header
+  const OCTET = { "Content-Type": "application/octet-stream" };
+  const file = gsf(heights(24, 16));
+  const got = check("an instrument file (GSF) as application/octet-stream", "POST", "/v1/psd?detrend=plane",
+    await call("POST", "/v1/psd?detrend=plane", { headers: OCTET, body: file }), { status: 200 });
+  report(got.json?.source?.format === "gsf" && got.json?.source?.nx === 24 && Math.abs(got.json?.grid?.dx - 1e-8) < 1e-20,
+    `the file's answer names its source and takes its grid (${JSON.stringify(got.json?.source)})`);
+  const cut = check("an instrument file cut short", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: OCTET, body: file.subarray(0, file.length - 5) }),
+    { status: 422, type: "/problems/bad-file" });
+  report(cut.json?.format === "gsf" && cut.json?.offset === file.length - 5, `bad-file names the format and the offset (${cut.json?.format}, ${cut.json?.offset})`);
+  const unknown = check("bytes of no format read here", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: OCTET, body: Buffer.from("GIF89a\0\0\0\0") }),
+    { status: 415, type: "/problems/unsupported-media-type" });
+  report(/nanoscope/.test(unknown.json?.detail || ""), "the 415 of an unknown file lists the formats read");
+  check("a channel the file does not have", "POST", "/v1/psd?channel=Phase", await call("POST", "/v1/psd?channel=Phase", { headers: OCTET, body: file }), { status: 422, type: "/problems/validation" });
+  check("dx beside a file that states its size", "POST", "/v1/psd?dx=1e-9", await call("POST", "/v1/psd?dx=1e-9", { headers: OCTET, body: file }), { status: 422, type: "/problems/validation" });
   // a cached answer (the same request again)
   const body = compute["/v1/adhesion"][0][1];
   const again = check("the same request again (from the cache)", "POST", "/v1/adhesion", await post("/v1/adhesion", body), { status: 200 });
@@ -183,9 +208,11 @@ async function memory() {
   const grid = check("a simulation whose 512² grid does not fit the budget", "POST", "/v1/simulations",
     await call("POST", "/v1/simulations", { base: MEM_URL, headers: JSON_CT, body: JSON.stringify({ psd: { kind: "power", D: 2.2, k1: 1, k2: 8, m0: 0.1 }, n: 512, realizations: 2, g_ave: [2] }) }), { status: 413 });
   report(/grid/.test(grid.json?.detail || ""), "the simulation's 413 names its grid");
-  const octet = await call("POST", "/v1/psd", { headers: early("application/octet-stream", 2 << 20) });
-  check("Content-Type: application/octet-stream", "POST", "/v1/psd", octet, { status: 415, type: "/problems/unsupported-media-type" });
-  report(octet.headers?.["accept-post"] === "application/json, text/plain, text/csv", `/v1/psd's 415 lists the types it takes in Accept-Post (${octet.headers?.["accept-post"]})`);
+  const png = await call("POST", "/v1/psd", { headers: early("image/png", 2 << 20) });
+  check("Content-Type: image/png", "POST", "/v1/psd", png, { status: 415, type: "/problems/unsupported-media-type" });
+  report(png.headers?.["accept-post"] === "application/json, text/plain, text/csv, application/octet-stream", `/v1/psd's 415 lists the types it takes in Accept-Post (${png.headers?.["accept-post"]})`);
+  check("an instrument file over 64 MiB", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: early("application/octet-stream", (64 << 20) + 1) }),
+    { status: 413, type: "/problems/content-too-large" });
 }
 
 // ---- 3. the service routes and the page ----

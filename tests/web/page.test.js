@@ -689,7 +689,7 @@ test("issue 30: a binary file is one line, not a list of problems; nothing stale
   await page.setInputFiles("#topo-file", { name: "image.png", mimeType: "image/png", buffer: png });
   await page.click("#topo-compute");
   await page.waitForFunction(() => /not a height map/.test(document.getElementById("status-text").textContent));
-  assert.equal(await page.textContent('.err[data-for="topo-file"]'), "not a height map: image.png is a PNG image; export the heights as text (one row a line)");
+  assert.equal(await page.textContent('.err[data-for="topo-file"]'), "not a height map: image.png is a PNG image; export the heights as text (one row a line) or send the instrument's own file");
   assert.equal(requests.slice(before).filter((u) => u.includes("/v1/")).length, 0, "nothing sent");
   // the previous map's plot and k1 are gone, its exports off
   assert.equal(await page.evaluate(() => LJPlots.figure(document.getElementById("plot-topo"))), null);
@@ -704,6 +704,74 @@ test("issue 30: a binary file is one line, not a list of problems; nothing stale
   assert.equal(await page.evaluate(() => LJPlots.figure(document.getElementById("plot-sweep"))), null);
   assert.equal(await page.isDisabled('[data-panel="sweep"] [data-export="csv"]'), true);
   assert.match(await page.textContent("#readout-traction"), /computed for: D = 2\.5; C = 0\.0795775; k1 = 1; k2 = ∞; dimensionless/);
+});
+
+// A NanoScope file of two 64 × 48 channels, Height and ZSensor (16-bit, the Z scale's value over
+// 65536 times the sensitivity in nm/V), written from its documentation: the text header, then
+// the images as little-endian int16.
+function nanoscopeFile() {
+  const nx = 64, ny = 48, hdr = 4096, n = nx * ny * 2;
+  const lines = ["\\*File list", "\\Version: 0x05120005", `\\Data length: ${hdr}`, "\\Date: 09:30:00 AM Mon Jun 03 2019",
+    "\\*Equipment list", "\\Microscope: Dimension Icon", "\\*Scanner list", "\\@Sens. Zsens: V 20 nm/V", "\\@Sens. ZsensSens: V 100 nm/V"];
+  ["Height", "ZSensor"].forEach((t, c) => lines.push("\\*Ciao image list", `\\Data offset: ${hdr + c * n}`, `\\Data length: ${n}`, "\\Bytes/pixel: 2",
+    `\\Samps/line: ${nx}`, `\\Number of lines: ${ny}`, "\\Scan Size: 640 480 nm", `\\@2:Image Data: S [${t}] "${t}"`,
+    `\\@2:Z scale: V [Sens. ${c ? "ZsensSens" : "Zsens"}] (0.0001 V/LSB) 6.5536 V`));
+  lines.push("\\*File list end");
+  const head = Buffer.alloc(hdr);
+  head.write(lines.join("\r\n") + "\r\n", "latin1");
+  const data = Buffer.alloc(2 * n);
+  for (let c = 0; c < 2; c++)
+    for (let j = 0; j < ny; j++)
+      for (let i = 0; i < nx; i++)
+        data.writeInt16LE(Math.round(8000 * Math.sin(0.3 * i + 0.2 * j + c) + 3000 * Math.cos(0.05 * i * j) + ((i * 7919 + j * 104729) % 997) - 498), c * n + 2 * (j * nx + i));
+  return Buffer.concat([head, data]);
+}
+
+test("issue 28: an instrument file chosen or dropped: its PSD, what the file said, its channels (desktop and 390 px)", async () => {
+  await page.uncheck("#use-material");
+  const spm = nanoscopeFile();
+  await page.setInputFiles("#topo-file", { name: "scan.spm", mimeType: "application/octet-stream", buffer: spm });
+  await page.fill("#topo-dx", "5e-9"); // the file's own spacing (10 nm) wins: dx is not sent
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of|refused/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent("#status-text"), /^PSD of scan\.spm: \d+ bins/);
+  const ro = await page.textContent("#readout-topo");
+  assert.match(ro, /file: nanoscope, channel "Height" of 2; 64 × 48 points, 6\.400e-7 × 4\.800e-7 m; heights in nm; instrument Bruker Dimension Icon; acquired 2019-06-03T09:30:00; no point missing/);
+  const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
+  const up = JSON.parse(json.requests[json.requests.length - 1].text || JSON.stringify(json.requests[json.requests.length - 1].body));
+  assert.equal(up.content_type, "application/octet-stream");
+  assert.ok(!/(^|&)dx=/.test(up.query), `the file's query ${up.query} has no dx`);
+  assert.equal(json.answers[json.answers.length - 1].grid.dx, 1e-8);
+  // the channels of the answer fill the selector; another one sends the file again
+  assert.ok(await page.isVisible("#topo-channel"));
+  assert.deepEqual(await page.$$eval("#topo-channel option", (o) => o.map((x) => x.textContent)), ["0: Height", "1: ZSensor"]);
+  await page.selectOption("#topo-channel", "1");
+  await page.waitForFunction(() => /channel "ZSensor"/.test(document.getElementById("readout-topo").textContent));
+  assert.ok((await inked("plot-topo")) > 500, "the PSD of the second channel is drawn");
+  // at 390 px, a file dropped on the card: the same, and the page does not scroll sideways
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.setInputFiles("#topo-file", []);
+  const dt = await page.evaluateHandle((bytes) => {
+    const d = new DataTransfer();
+    d.items.add(new File([new Uint8Array(bytes)], "dropped.spm", { type: "application/octet-stream" }));
+    return d;
+  }, [...spm]);
+  await page.dispatchEvent("#topo-card", "drop", { dataTransfer: dt });
+  assert.equal(await page.evaluate(() => document.getElementById("topo-file").files[0].name), "dropped.spm");
+  await page.click("#topo-compute");
+  await page.waitForFunction(() => /^PSD of dropped/.test(document.getElementById("status-text").textContent));
+  assert.match(await page.textContent("#readout-topo"), /file: nanoscope, channel "Height"/);
+  const w = await page.evaluate(() => [document.documentElement.scrollWidth, document.body.scrollWidth]);
+  assert.ok(w[0] <= 390 && w[1] <= 390, `page ${w[0]} px wide at 390 with the file's readout`);
+  await page.setViewportSize({ width: 1400, height: 1000 });
+  // bytes of no format read here: the server's 415 in the card, listing the formats
+  await expect4xx(async () => {
+    await page.setInputFiles("#topo-file", { name: "mystery.bin", mimeType: "application/octet-stream", buffer: Buffer.from([0, 1, 2, 3, 4, 5, 6, 7]) });
+    await page.click("#topo-compute");
+    await page.waitForFunction(() => /refused/.test(document.getElementById("status-text").textContent));
+  });
+  assert.match(await page.textContent("#readout-topo"), /415 .*nanoscope/);
+  await page.setInputFiles("#topo-file", []);
 });
 
 test("issue 30: a bad field puts the view and the focus on it", async () => {
@@ -865,8 +933,9 @@ test("all panels for the screenshot; no console error at all, no CSP violation, 
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(BUILD, "web-screenshot.png"), fullPage: true });
   assert.deepEqual(consoleErrors, []);
-  // the refusals provoked on purpose: 422 (a bad field), 404 (a job of another server)
-  assert.ok(intended.every((t) => / (422|404) /.test(t)), String(intended));
+  // the refusals provoked on purpose: 422 (a bad field), 404 (a job of another server), 415 (a
+  // file of no format the server reads)
+  assert.ok(intended.every((t) => / (415|422|404) /.test(t)), String(intended));
   assert.deepEqual(await page.evaluate(() => window.__csp), []);
   assert.deepEqual(foreign, []);
   assert.ok(requests.length > 10);
