@@ -210,7 +210,7 @@ async function memory() {
   report(/grid/.test(grid.json?.detail || ""), "the simulation's 413 names its grid");
   const png = await call("POST", "/v1/psd", { headers: early("image/png", 2 << 20) });
   check("Content-Type: image/png", "POST", "/v1/psd", png, { status: 415, type: "/problems/unsupported-media-type" });
-  report(png.headers?.["accept-post"] === "application/json, text/plain, text/csv, application/octet-stream", `/v1/psd's 415 lists the types it takes in Accept-Post (${png.headers?.["accept-post"]})`);
+  report(png.headers?.["accept-post"] === "application/json, text/plain, text/csv, application/octet-stream, application/netcdf, application/x-igor-binary-wave, application/x-sensofar-spm", `/v1/psd's 415 lists the types it takes in Accept-Post (${png.headers?.["accept-post"]})`);
   check("an instrument file over 64 MiB", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: early("application/octet-stream", (64 << 20) + 1) }),
     { status: 413, type: "/problems/content-too-large" });
 }
