@@ -1,0 +1,151 @@
+#!/usr/bin/env bash
+# make bench: skip (turns the validity map's results into a table; no computation of its own)
+#
+# The validity map as data: reads the discrete model's and the theory's adhesion summaries that
+# bench/theory_map.sh and bench/theory_map_k2.sh wrote, and writes
+#   core/validity_table.c                     the table the answers read (include/ljgap_validity.h)
+#   bench/results/theory_map_validity.csv     the same rows, for reading and plotting
+# One command regenerates both from whatever results are there:
+#   bench/validity_table.sh
+# Each row: k2/k1 (8, 16, 32, or the continuum k2 = ∞), D, m0, and for g_eq, sigma_max and
+# dgamma_eff the relative difference (theory - discrete)/discrete with its error:
+#   k2 = 8    the main map (L = 8π, n = 256, 4 realizations: theory_map.csv, with
+#             theory_map_ext.csv for m0 0.7 and 1); where L = 8π is missing, the L = 4π run plus
+#             the L bias of the nearest m0 that has both, that bias added to the error;
+#   k2 = 16, 32  the L = 4π runs (n = 256, 512: 8 points per shortest wave, 4 realizations,
+#             theory_map_k2.csv) corrected by the L bias seen at k2 = 8:
+#             rel_k2(4π) - rel_8(4π) + rel_8(8π), errors added;
+#   continuum rel = a + b s, s = (k1/k2)^p, p = 2(3 - D) (the variance beyond k2 goes as
+#             k2^(2D-6)), a and b through the k2 = 16 and 32 points; the error is theirs
+#             propagated plus the L bias's plus |fit at k2 = 8 - rel_8(4π)| (the check).
+# A k2 level is written only when every D and m0 of it is there (the continuum needs 16 and 32).
+set -eu
+cd "$(dirname "$0")/.."
+res=${RESULTS:-bench/results}
+out=${OUT:-core/validity_table.c}
+csv=${CSV:-$res/theory_map_validity.csv}
+ext="$res/theory_map_ext.csv"
+k2f="$res/theory_map_k2.csv"
+[ -f "$ext" ] || ext=/dev/null
+[ -f "$k2f" ] || k2f=/dev/null
+tmp=$(mktemp)
+trap 'rm -f "$tmp"' EXIT
+
+awk -F, -v OFS=, -v csv="$csv" '
+    function abs(x) { return x < 0 ? -x : x }
+    FNR == 1 || /^#/ || $1 == "label" { next }
+    {
+        # which run: the main map at 8π (label map) or a k2 run at 4π (label k2_K)
+        if ($1 == "map") set = "M8"; else if ($1 ~ /^k2_/) set = "K" substr($1, 4); else next
+        key = set SUBSEP $2 SUBSEP ($3 + 0)
+        Ds[$2] = 1; m0s[$3 + 0] = 1
+        if ($1 ~ /^k2_/) levels[substr($1, 4) + 0] = 1
+        for (q = 0; q < 3; q++) {
+            c = q == 2 ? 16 : 10 + 2 * q # g_eq, sigma_max, dgamma_eff
+            v = $c; e = $(c + 1)
+            if ($4 == "theory") { th[key, q] = v; the[key, q] = e; have_t[key] = 1 }
+            else if ($4 == "discrete") { ds[key, q] = v; dse[key, q] = e; have_d[key] = 1 }
+            else if ($4 == "hybrid") { hy[key, $5 + 0, q] = v; hye[key, $5 + 0, q] = e }
+        }
+    }
+    # relative difference and its error of run key, quantity q (1: ok)
+    function rel(key, q) {
+        if (!(key in have_t) || !(key in have_d)) return 0
+        R = th[key, q] / ds[key, q] - 1
+        RE = (abs(1 + R) * dse[key, q] + the[key, q]) / abs(ds[key, q])
+        return 1
+    }
+    # the indices of arr, numerically ascending, into out[1..]; returns their number
+    function sortnum(arr, out,    n, x, i, t) {
+        n = 0
+        for (x in arr) { out[++n] = x; for (i = n; i > 1 && out[i - 1] + 0 > out[i] + 0; i--) { t = out[i]; out[i] = out[i - 1]; out[i - 1] = t } }
+        return n
+    }
+    function hrel(key, ks, q) {
+        if (!((key, ks, q) in hy)) return "NAN"
+        return sprintf("%.6f", hy[key, ks, q] / ds[key, q] - 1)
+    }
+    END {
+        nD = sortnum(Ds, D); nm = sortnum(m0s, M); nk = sortnum(levels, K)
+        # the L bias at k2 = 8 per D, m0, q: rel_8(8π) - rel_8(4π), or the nearest measured m0
+        for (i = 1; i <= nD; i++) for (q = 0; q < 3; q++) {
+            for (j = 1; j <= nm; j++) {
+                a = "M8" SUBSEP D[i] SUBSEP M[j]; b = "K8" SUBSEP D[i] SUBSEP M[j]
+                if (rel(a, q)) { r8 = R; e8 = RE; if (rel(b, q)) { bias[i, j, q] = r8 - R; biase[i, j, q] = e8 + RE; meas[i, j, q] = 1 } }
+            }
+            for (j = 1; j <= nm; j++) if (!((i, j, q) in meas)) {
+                best = 0
+                for (jj = 1; jj <= nm; jj++) if ((i, jj, q) in meas && (!best || abs(jj - j) < abs(best - j) || (abs(jj - j) == abs(best - j) && jj > best))) best = jj
+                if (best) { bias[i, j, q] = bias[i, best, q]; biase[i, j, q] = biase[i, best, q] + abs(bias[i, best, q]); fb[i, j] = 1 }
+            }
+        }
+        print "k2_over_k1,D,m0,quantity,rel,rel_err,L_bias,L_bias_err,L_bias_from,hyb2_rel,hyb4_rel" > csv
+        n = 0
+        # k2 = 8: the main map where it is, else 4π + bias
+        for (kk = 1; kk <= nk + 1; kk++) {
+            k = kk <= nk ? K[kk] : "inf"
+            if (k == "inf" && !(16 in levels && 32 in levels)) continue
+            complete = 1; buf = ""
+            for (i = 1; i <= nD && complete; i++) for (j = 1; j <= nm && complete; j++) {
+                row = ""
+                for (q = 0; q < 3 && complete; q++) {
+                    if (!((i, j, q) in bias)) { complete = 0; break }
+                    bf = fb[i, j] ? "nearest m0" : "measured"
+                    if (k == 8 && rel("M8" SUBSEP D[i] SUBSEP M[j], q)) { r = R; e = RE; bf = "main map (8π)" }
+                    else if (k != "inf") {
+                        if (!rel("K" k SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }
+                        r = R + bias[i, j, q]; e = RE + biase[i, j, q]
+                        if (k != 8) { if (!rel("K8" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r -= R }
+                    } else {
+                        p = 2 * (3 - D[i]); s8 = 8 ^ -p; s16 = 16 ^ -p; s32 = 32 ^ -p
+                        if (!rel("K16" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r16 = R; e16 = RE
+                        if (!rel("K32" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r32 = R; e32 = RE
+                        if (!rel("K8" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r8 = R
+                        sl = (r16 - r32) / (s16 - s32); a = r32 - sl * s32
+                        chk = abs(a + sl * s8 - r8)
+                        r = a + bias[i, j, q]
+                        e = (e16 * s32 + e32 * s16) / (s16 - s32) + biase[i, j, q] + chk
+                    }
+                    vr[q] = r; ve[q] = e
+                    h2 = k == 8 ? hrel("M8" SUBSEP D[i] SUBSEP M[j], 2, q) : "NAN"
+                    h4 = k == 8 ? hrel("M8" SUBSEP D[i] SUBSEP M[j], 4, q) : "NAN"
+                    vh2[q] = h2; vh4[q] = h4
+                    row = row sprintf("%s,%s,%s,%s,%.6f,%.6f,%.6f,%.6f,%s,%s,%s\n", k, D[i], M[j], q == 0 ? "g_eq" : q == 1 ? "sigma_max" : "dgamma_eff", r, e, bias[i, j, q], biase[i, j, q], bf, h2, h4)
+                }
+                if (!complete) break
+                buf = buf sprintf("    {%s, %s, %s, {%.6f, %.6f, %.6f}, {%.6f, %.6f, %.6f}, {%.6f, %.6f, %.6f}, {%s, %s, %s}, {%s, %s, %s}},\n",
+                                  k == "inf" ? "INFINITY" : k, D[i], M[j], vr[0], vr[1], vr[2], ve[0], ve[1], ve[2],
+                                  bias[i, j, 0], bias[i, j, 1], bias[i, j, 2], vh2[0], vh2[1], vh2[2], vh4[0], vh4[1], vh4[2])
+                csvbuf = csvbuf row
+            }
+            if (complete) { printf "%s", buf; printf "%s", csvbuf >> csv; n++ }
+            csvbuf = ""
+        }
+    }' bench/results/theory_map.csv "$ext" "$k2f" >"$tmp"
+
+levels=$(cut -d, -f1 "$csv" | sed 1d | sort -u | sort -g | tr '\n' ' ')
+rows=$(grep -c '^    {' "$tmp" || true)
+{
+    cat <<EOF
+/* validity_table.c -- GENERATED by bench/validity_table.sh; do not edit. Regenerate with
+ *   bench/validity_table.sh
+ * from bench/results/theory_map.csv (the main map: k2/k1 = 8, L = 8π, n = 256), theory_map_ext.csv
+ * (the same at m0 0.7 and 1) and theory_map_k2.csv (k2/k1 = 8, 16, 32 at L = 4π, n = 128, 256,
+ * 512: 8 points per shortest wave), every case with 4 realizations (bench/theory_map.sh,
+ * bench/theory_map_k2.sh). k2/k1 levels present: $levels(inf: the continuum k2 = ∞ by
+ * extrapolation in k2). Rows: $rows. What each column means: include/ljgap_validity.h.
+ */
+#include "ljgap_validity.h"
+
+#include <math.h>
+#include <stddef.h>
+
+const ljgap_validity_row ljgap_validity_rows[] = {
+EOF
+    cat "$tmp"
+    cat <<EOF
+};
+const size_t ljgap_validity_nrows = sizeof ljgap_validity_rows / sizeof ljgap_validity_rows[0];
+EOF
+} >"$out"
+echo "wrote $out ($rows rows; k2/k1 levels: $levels) and $csv"
