@@ -124,6 +124,24 @@ awk -F, -v OFS=, -v csv="$csv" '
     }' bench/results/theory_map.csv "$ext" "$k2f" >"$tmp"
 
 levels=$(cut -d, -f1 "$csv" | sed 1d | sort -u | sort -g | tr '\n' ' ')
+# How far the discrete model is converged: the largest relative change of g_eq, sigma_max and
+# dgamma_eff over the convergence cases, per case label, against the runs they repeat.
+conv() { # conv BASE_FILE BASE_LABEL CONV_FILE: "label <= x %, ..." (nothing when absent)
+    [ -f "$1" ] && [ -f "$3" ] || return 0
+    awk -F, -v base="$2" '
+        FNR == 1 || /^#/ || $4 != "discrete" { next }
+        FILENAME == ARGV[1] { if ($1 == base) for (q = 10; q <= 16; q += 2) b[$2, $3 + 0, q] = $q; next }
+        { for (q = 10; q <= 16; q += 2) { if (q == 14 || !(($2, $3 + 0, q) in b)) continue
+              d = ($q - b[$2, $3 + 0, q]) / b[$2, $3 + 0, q]; d = d < 0 ? -d : d
+              if (!($1 in mx)) order[++n] = $1
+              if (d > mx[$1]) mx[$1] = d; cases[$1, $2 "/" $3] = 1 } }
+        END { for (i = 1; i <= n; i++) printf "%s%s %.1f %%", (i > 1 ? ", " : ""), order[i], 100 * mx[order[i]] }' "$1" "$3"
+}
+c8=$(conv "$res/theory_map.csv" map "$res/theory_map_convergence.csv")
+c32=$(conv "$k2f" k2_32 "$res/theory_map_conv32.csv")
+convergence="largest change of g_eq, sigma_max, dgamma_eff over the convergence cases (D, m0 = 2.2, 0.1; 2.5, 0.2; 2.8, 0.5 at k2/k1 = 8"
+convergence="$convergence against L = 8π, n = 256: ${c8:-not run}; at k2/k1 = 32 (2.2, 0.1; 2.8, 0.5) against L = 4π, n = 512: ${c32:-not yet run}"
+convergence="$convergence; in L at every point: each row's L_bias, rel(8π) - rel(4π) at k2/k1 = 8 (n512, n1024: twice the points; R8: 8 realizations; L4pi, L16pi: the square)"
 rows=$(grep -c '^    {' "$tmp" || true)
 {
     cat <<EOF
@@ -146,6 +164,16 @@ EOF
     cat <<EOF
 };
 const size_t ljgap_validity_nrows = sizeof ljgap_validity_rows / sizeof ljgap_validity_rows[0];
+
+const ljgap_validity_how_info ljgap_validity_how = {
+    "BUILD=build bench/theory_map.sh; BUILD=build bench/theory_map_k2.sh; bench/validity_table.sh",
+    "the discrete model of docs/model.md, k1 = 1: k2/k1 = 8 on L = 8π, n = 256 (4 points per "
+    "shortest wave; the main map), and k2/k1 = 8, 16, 32 on L = 4π, n = 128, 256, 512 (8 points "
+    "per shortest wave) tied to it by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
+    4,
+    "$convergence",
+    "rel = a + b (k1/k2)^p, p = 2(3 - D), through the k2/k1 = 16 and 32 points (plus the L bias); "
+    "error: theirs propagated, the L bias's, and |the fit at k2/k1 = 8 - the k2/k1 = 8 point|"};
 EOF
 } >"$out"
 echo "wrote $out ($rows rows; k2/k1 levels: $levels) and $csv"

@@ -41,3 +41,13 @@ const ljgap_validity_row ljgap_validity_rows[] = {
     {8, 2.8, 1, {0.339256, -0.434302, -0.412123}, {0.050746, 0.100863, 0.065933}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
 };
 const size_t ljgap_validity_nrows = sizeof ljgap_validity_rows / sizeof ljgap_validity_rows[0];
+
+const ljgap_validity_how_info ljgap_validity_how = {
+    "BUILD=build bench/theory_map.sh; BUILD=build bench/theory_map_k2.sh; bench/validity_table.sh",
+    "the discrete model of docs/model.md, k1 = 1: k2/k1 = 8 on L = 8π, n = 256 (4 points per "
+    "shortest wave; the main map), and k2/k1 = 8, 16, 32 on L = 4π, n = 128, 256, 512 (8 points "
+    "per shortest wave) tied to it by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
+    4,
+    "largest change of g_eq, sigma_max, dgamma_eff over the convergence cases (D, m0 = 2.2, 0.1; 2.5, 0.2; 2.8, 0.5 at k2/k1 = 8 against L = 8π, n = 256: L4pi 5.6 %, n512 0.0 %, R8 1.0 %, L16pi 1.8 %; at k2/k1 = 32 (2.2, 0.1; 2.8, 0.5) against L = 4π, n = 512: not yet run; in L at every point: each row's L_bias, rel(8π) - rel(4π) at k2/k1 = 8 (n512, n1024: twice the points; R8: 8 realizations; L4pi, L16pi: the square)",
+    "rel = a + b (k1/k2)^p, p = 2(3 - D), through the k2/k1 = 16 and 32 points (plus the L bias); "
+    "error: theirs propagated, the L bias's, and |the fit at k2/k1 = 8 - the k2/k1 = 8 point|"};

@@ -36,6 +36,15 @@ typedef struct {
 } ljgap_validity_row;
 extern const ljgap_validity_row ljgap_validity_rows[];
 extern const size_t ljgap_validity_nrows;
+/* How the map was made, in words (generated with the table). */
+typedef struct {
+    const char *command;        /* the commands that make it */
+    const char *discretisation; /* the discrete model's grid and square per k2/k1 */
+    int realizations;           /* of every discrete run */
+    const char *convergence;    /* how far the discrete model is converged (grid, L, R) */
+    const char *continuum;      /* how the k2 = ∞ rows are extrapolated */
+} ljgap_validity_how_info;
+extern const ljgap_validity_how_info ljgap_validity_how;
 
 /* What the map says about one spectrum. */
 typedef struct {

@@ -52,6 +52,7 @@
 #include "request.h"
 #include "textbuf.h"   /* ljgap_utf8_span */
 #include "topo_text.h" /* the text upload of psd */
+#include "validity.h"  /* the answers' "model" */
 
 #include <math.h>
 #include <pthread.h>
@@ -320,6 +321,7 @@ static int run_adhesion(job *j)
     if (st) return st;
     ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
     put_si(j, j->ans, &sum);
+    ljgap_ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 
@@ -357,6 +359,7 @@ static int run_traction(job *j)
         put_si_summary(j, sum_obj, err, "summary", &sum);
         free(pt);
     }
+    ljgap_ans_model(j, &rq->psd);
 end:
     free(sigma);
     return st;
@@ -419,6 +422,7 @@ static int run_pdf(job *j)
         put_num(j, e, "phi_l1", p[i].phi_err, "error.pdfs.phi_l1", (long)i);
         put_num(j, e, "sigma", p[i].sigma.err, "error.pdfs.sigma", (long)i);
     }
+    ljgap_ans_model(j, &rq->psd);
 end:
     if (p) ljgap_pdf_release(p, rq->nx);
     free(p);
@@ -520,6 +524,7 @@ static int run_sweep(job *j)
         } else if (sir)
             put(j, sir, NULL, cJSON_CreateNull());
     }
+    ljgap_ans_model_sweep(j);
     if (failed == rq->nx) {
         snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
         st = LJGAP_EFAIL;
@@ -567,6 +572,7 @@ static int run_contact(job *j)
     put(j, j->ans, "regime", cJSON_CreateString(ljgap_regime_name(c.regime)));
     put_num(j, j->ans, "R", j->rq.R, "R", -1);
     put_si(j, j->ans, &sum);
+    ljgap_ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 
