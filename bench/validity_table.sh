@@ -95,7 +95,6 @@ awk -F, -v OFS=, -v csv="$csv" '
                     else if (k != "inf") {
                         if (!rel("K" k SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }
                         r = R + bias[i, j, q]; e = RE + biase[i, j, q]
-                        if (k != 8) { if (!rel("K8" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r -= R }
                     } else {
                         p = 2 * (3 - D[i]); s8 = 8 ^ -p; s16 = 16 ^ -p; s32 = 32 ^ -p
                         if (!rel("K16" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r16 = R; e16 = RE

@@ -9,6 +9,8 @@
  *   values as a bound, inside.
  * - The k2/k1 = 8 rows agree with an independent computation of the same relative differences:
  *   bench/theory_map.sh's own awk, bench/results/theory_map_rel.csv (from the main map alone).
+ * - The k2/k1 = 16 and 32 rows are the L = 4π runs tied to the main map by the L bias at 8,
+ *   rel_k(4π) - rel_8(4π) + rel_8(8π), computed here from the bench's CSVs.
  * - A table PSD sampled from a power law has that power law's D, m0 and ends; a table with a
  *   knee (D 2.2 then 2.9) is not power-law-like.
  */
@@ -183,6 +185,71 @@ static void agrees_with_bench(void **state)
     assert_int_equal(n, 3 * 3 * 7);
 }
 
+/* theory_map_k2.csv's relative difference of label k2_K at D, m0 for each quantity */
+typedef struct {
+    char label[16];
+    double D, m0, th[3], ds[3];
+} k2run;
+
+static size_t read_k2(k2run *r, size_t max)
+{
+    FILE *f = fopen("bench/results/theory_map_k2.csv", "r");
+    char line[512], model[32];
+    size_t n = 0;
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f) && n < max) {
+        k2run x;
+        double v[8];
+        if (sscanf(line, "%15[^,],%lf,%lf,%31[^,],%*[^,],%*[^,],%*[^,],%*[^,],%*[^,],%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf",
+                   x.label, &x.D, &x.m0, model, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7]) != 12)
+            continue;
+        size_t i = 0;
+        while (i < n && !(!strcmp(r[i].label, x.label) && r[i].D == x.D && r[i].m0 == x.m0))
+            i++;
+        if (i == n) r[n++] = x;
+        double *dst = !strcmp(model, "theory") ? r[i].th : r[i].ds;
+        dst[0] = v[0], dst[1] = v[2], dst[2] = v[6];
+    }
+    fclose(f);
+    return n;
+}
+
+static const k2run *find_k2(const k2run *r, size_t n, const char *label, double D, double m0)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!strcmp(r[i].label, label) && r[i].D == D && r[i].m0 == m0) return &r[i];
+    return NULL;
+}
+
+static void tied_by_L_bias(void **state)
+{
+    (void)state;
+    static k2run runs[200];
+    size_t n = read_k2(runs, 200), checked = 0;
+    for (size_t i = 0; i < ljgap_validity_nrows; i++) {
+        const ljgap_validity_row *r = &ljgap_validity_rows[i], *main8;
+        char label[16];
+        if (isinf(r->k2_over_k1) || r->k2_over_k1 == 8) continue;
+        snprintf(label, sizeof label, "k2_%g", r->k2_over_k1);
+        const k2run *k = find_k2(runs, n, label, r->D, r->m0), *e = find_k2(runs, n, "k2_8", r->D, r->m0);
+        main8 = row_at(8, r->D, r->m0);
+        assert_non_null(k);
+        assert_non_null(e);
+        assert_non_null(main8);
+        if (main8->L_bias[0] == 0 && main8->L_bias[1] == 0) continue;
+        for (int q = 0; q < LJGAP_V_N; q++) {
+            double want = (k->th[q] / k->ds[q] - 1) - (e->th[q] / e->ds[q] - 1) + main8->rel[q];
+            /* main8->rel is the 8π value where the main map has the point; else 4π + bias */
+            assert_close(r->rel[q], want, 2e-5);
+        }
+        checked++;
+    }
+    size_t levels = 0;
+    for (size_t i = 0; i < ljgap_validity_nrows; i++)
+        levels += ljgap_validity_rows[i].k2_over_k1 == 16;
+    assert_true(levels == 0 || checked >= 27);
+}
+
 static void table_psd(void **state)
 {
     (void)state;
@@ -227,6 +294,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(exact_at_points),   cmocka_unit_test(monotone_between),
         cmocka_unit_test(outside_reasons),   cmocka_unit_test(agrees_with_bench),
+        cmocka_unit_test(tied_by_L_bias),
         cmocka_unit_test(table_psd),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
