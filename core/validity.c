@@ -16,8 +16,8 @@
 
 const char *const ljgap_validity_quantities[LJGAP_V_N] = {"g_eq", "sigma_max", "dgamma_eff"};
 
-#define AX_MAX 16 /* largest number of values on one axis */
-#define TINY 1e-9 /* relative slack at the map's edges (SI conversions round) */
+#define AX_MAX 16   /* largest number of values on one axis */
+#define TINY 1e-9   /* relative slack at the map's edges (SI conversions round) */
 #define K1_TOL 1e-6 /* the map is computed at k1 = 1: within this, k1 is 1 */
 
 typedef struct {
@@ -146,8 +146,8 @@ int ljgap_validity_at(double D, double m0, double k1, double k2, ljgap_validity 
         snprintf(out->reason, sizeof out->reason, "D = %g is outside the map's %g to %g", D, Dlo,
                  Dhi);
     else if (r < klo * (1 - TINY))
-        snprintf(out->reason, sizeof out->reason,
-                 "k2/k1 = %.4g is below the map's smallest, %g", r, klo);
+        snprintf(out->reason, sizeof out->reason, "k2/k1 = %.4g is below the map's smallest, %g", r,
+                 klo);
     else if (r > khi * (1 + TINY))
         snprintf(out->reason, sizeof out->reason,
                  "k2/k1 = %.4g is beyond the map's largest, %g (the continuum is not yet mapped)",

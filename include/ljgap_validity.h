@@ -25,14 +25,14 @@ extern const char *const ljgap_validity_quantities[LJGAP_V_N]; /* "g_eq", ... */
 
 /* One point of the map. */
 typedef struct {
-    double k2_over_k1;       /* 8, 16, 32, or INFINITY (the continuum) */
-    double D, m0;            /* fractal dimension, variance (k1 = 1) */
-    double rel[LJGAP_V_N];   /* (theory - discrete)/discrete */
-    double err[LJGAP_V_N];   /* its estimated error (realizations, L correction, extrapolation) */
+    double k2_over_k1;        /* 8, 16, 32, or INFINITY (the continuum) */
+    double D, m0;             /* fractal dimension, variance (k1 = 1) */
+    double rel[LJGAP_V_N];    /* (theory - discrete)/discrete */
+    double err[LJGAP_V_N];    /* its estimated error (realizations, L correction, extrapolation) */
     double L_bias[LJGAP_V_N]; /* the finite-size correction rel(L = 8π) - rel(L = 4π) at k2/k1 = 8
-                              * that the row includes (0 where none was needed) */
-    double hyb2[LJGAP_V_N];  /* the hybrid's (hybrid - discrete)/discrete at k_split = 2 and 4 */
-    double hyb4[LJGAP_V_N];  /* (k2/k1 = 8 only; NAN where not computed) */
+                               * that the row includes (0 where none was needed) */
+    double hyb2[LJGAP_V_N];   /* the hybrid's (hybrid - discrete)/discrete at k_split = 2 and 4 */
+    double hyb4[LJGAP_V_N];   /* (k2/k1 = 8 only; NAN where not computed) */
 } ljgap_validity_row;
 extern const ljgap_validity_row ljgap_validity_rows[];
 extern const size_t ljgap_validity_nrows;
@@ -50,14 +50,14 @@ extern const ljgap_validity_how_info ljgap_validity_how;
 typedef struct {
     double rel[LJGAP_V_N], err[LJGAP_V_N]; /* at the point below: linear in (k1/k2)^(2(3-D)),
                                             * D and ln m0 between the map's points */
-    int inside;  /* 1: the spectrum lies on the map (rel, err are its values) */
-    int bound;   /* 1: m0 below the map's smallest: its values there, an upper bound (the
-                  * differences vanish as m0 -> 0) */
-    double D, m0, k1, k2_over_k1; /* the spectrum's (for a table: its effective D) */
+    int inside; /* 1: the spectrum lies on the map (rel, err are its values) */
+    int bound;  /* 1: m0 below the map's smallest: its values there, an upper bound (the
+                 * differences vanish as m0 -> 0) */
+    double D, m0, k1, k2_over_k1;      /* the spectrum's (for a table: its effective D) */
     double at_D, at_m0, at_k2_over_k1; /* the point of the map whose values rel, err are (the
                                         * spectrum's, or outside the nearest point of the map) */
-    const char *method; /* how D, m0 and k2/k1 were read from the PSD */
-    char reason[200];   /* why outside ("" inside) */
+    const char *method;                /* how D, m0 and k2/k1 were read from the PSD */
+    char reason[200];                  /* why outside ("" inside) */
 } ljgap_validity;
 
 /* The map at a power-law spectrum (D, m0, k1, k2; k2 = INFINITY for no cut-off). Returns

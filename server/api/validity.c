@@ -26,12 +26,13 @@ static cJSON *num(double v)
     return isfinite(v) ? cJSON_CreateNumber(v) : cJSON_CreateNull();
 }
 
-/* {g_eq, sigma_max, dgamma_eff} of x into parent.key */
+/* {g_eq, sigma_max, dgamma_eff} of x into parent.key, to the table's 6 decimals (between its
+ * points the interpolation's last bits say nothing) */
 static void triple(job *j, cJSON *parent, const char *key, const double *x)
 {
     cJSON *o = ljgap_ans_put(j, parent, key, cJSON_CreateObject());
     for (int q = 0; o && q < LJGAP_V_N; q++)
-        ljgap_ans_put(j, o, ljgap_validity_quantities[q], num(x[q]));
+        ljgap_ans_put(j, o, ljgap_validity_quantities[q], num(round(x[q] * 1e6) / 1e6));
 }
 
 /* k2/k1 as the contract writes it: null for ∞ */

@@ -86,7 +86,8 @@ static void walk(const ljgap_validity_row *a, const ljgap_validity_row *b, int a
             if (s > 0) {
                 double up = b->rel[q] >= a->rel[q] ? 1 : -1;
                 if (up * (v.rel[q] - prev[q]) < -1e-12)
-                    fail_msg("q %d not monotone at t %g: %.12g after %.12g", q, t, v.rel[q], prev[q]);
+                    fail_msg("q %d not monotone at t %g: %.12g after %.12g", q, t, v.rel[q],
+                             prev[q]);
             }
             prev[q] = v.rel[q];
             if (s == 20 && axis > 0) /* midway in D, in ln m0: the mean of the ends */
@@ -173,7 +174,10 @@ static void agrees_with_bench(void **state)
         char q[32];
         if (sscanf(line, "%lf,%lf,%31[^,],%lf,%lf,%lf", &D, &m0, q, &disc, &derr, &rel) != 6)
             continue;
-        int qi = !strcmp(q, "g_eq") ? 0 : !strcmp(q, "sigma_max") ? 1 : !strcmp(q, "dgamma_eff") ? 2 : -1;
+        int qi = !strcmp(q, "g_eq")         ? 0
+                 : !strcmp(q, "sigma_max")  ? 1
+                 : !strcmp(q, "dgamma_eff") ? 2
+                                            : -1;
         if (qi < 0) continue;
         const ljgap_validity_row *r = row_at(8, D, m0);
         assert_non_null(r);
@@ -200,8 +204,11 @@ static size_t read_k2(k2run *r, size_t max)
     while (fgets(line, sizeof line, f) && n < max) {
         k2run x;
         double v[8];
-        if (sscanf(line, "%15[^,],%lf,%lf,%31[^,],%*[^,],%*[^,],%*[^,],%*[^,],%*[^,],%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf",
-                   x.label, &x.D, &x.m0, model, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7]) != 12)
+        if (sscanf(line,
+                   "%15[^,],%lf,%lf,%31[^,],%*[^,],%*[^,],%*[^,],%*[^,],%*[^,],%lf,%lf,%lf,%lf,%lf,"
+                   "%lf,%lf,%lf",
+                   x.label, &x.D, &x.m0, model, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
+                   &v[7]) != 12)
             continue;
         size_t i = 0;
         while (i < n && !(!strcmp(r[i].label, x.label) && r[i].D == x.D && r[i].m0 == x.m0))
@@ -231,7 +238,8 @@ static void tied_by_L_bias(void **state)
         char label[16];
         if (isinf(r->k2_over_k1) || r->k2_over_k1 == 8) continue;
         snprintf(label, sizeof label, "k2_%g", r->k2_over_k1);
-        const k2run *k = find_k2(runs, n, label, r->D, r->m0), *e = find_k2(runs, n, "k2_8", r->D, r->m0);
+        const k2run *k = find_k2(runs, n, label, r->D, r->m0),
+                    *e = find_k2(runs, n, "k2_8", r->D, r->m0);
         main8 = row_at(8, r->D, r->m0);
         assert_non_null(k);
         assert_non_null(e);
@@ -292,10 +300,9 @@ static void table_psd(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(exact_at_points),   cmocka_unit_test(monotone_between),
-        cmocka_unit_test(outside_reasons),   cmocka_unit_test(agrees_with_bench),
-        cmocka_unit_test(tied_by_L_bias),
-        cmocka_unit_test(table_psd),
+        cmocka_unit_test(exact_at_points), cmocka_unit_test(monotone_between),
+        cmocka_unit_test(outside_reasons), cmocka_unit_test(agrees_with_bench),
+        cmocka_unit_test(tied_by_L_bias),  cmocka_unit_test(table_psd),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
