@@ -52,7 +52,7 @@
 #include "request.h"
 #include "textbuf.h"   /* ljgap_utf8_span */
 #include "topo_text.h" /* the text upload of psd */
-#include "validity.h"  /* the answers' "model" */
+#include "validity/validity.h" /* the answers' "model" */
 
 #include <math.h>
 #include <pthread.h>

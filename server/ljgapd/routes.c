@@ -30,7 +30,7 @@
 #include "ljgap.h"
 #include "ljgap_sim.h"
 #include "problems.h"
-#include "validity.h"
+#include "validity/validity.h"
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_version.h>

@@ -22,7 +22,7 @@
 
 #include "handler.h"
 #include "ljgap_validity.h"
-#include "validity.h"
+#include "validity/validity.h"
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_errno.h>
