@@ -17,7 +17,9 @@
 #             rel_k2(4π) - rel_8(4π) + rel_8(8π), errors added;
 #   continuum rel = a + b s, s = (k1/k2)^p, p = 2(3 - D) (the variance beyond k2 goes as
 #             k2^(2D-6)), a and b through the k2 = 16 and 32 points; the error is theirs
-#             propagated plus the L bias's plus |fit at k2 = 8 - rel_8(4π)| (the check).
+#             propagated plus the L bias's plus |fit at k2 = 8 - rel_8(4π)| (the check). Until
+#             k2 = 32 is complete: through 8 and 16, the check replaced by the whole
+#             extrapolated step |a - rel_16| (no third level to test the form with).
 # A k2 level is written only when every D and m0 of it is there (the continuum needs 16 and 32).
 set -eu
 cd "$(dirname "$0")/.."
@@ -29,9 +31,10 @@ k2f="$res/theory_map_k2.csv"
 [ -f "$ext" ] || ext=/dev/null
 [ -f "$k2f" ] || k2f=/dev/null
 tmp=$(mktemp)
-trap 'rm -f "$tmp"' EXIT
 
-awk -F, -v OFS=, -v csv="$csv" '
+cont=$(mktemp)
+trap 'rm -f "$tmp" "$cont"' EXIT
+awk -F, -v OFS=, -v csv="$csv" -v cont="$cont" '
     function abs(x) { return x < 0 ? -x : x }
     FNR == 1 || /^#/ || $1 == "label" { next }
     {
@@ -84,7 +87,11 @@ awk -F, -v OFS=, -v csv="$csv" '
         # k2 = 8: the main map where it is, else 4π + bias
         for (kk = 1; kk <= nk + 1; kk++) {
             k = kk <= nk ? K[kk] : "inf"
-            if (k == "inf" && !(16 in levels && 32 in levels)) continue
+            if (k == "inf") { # the pair of levels to extrapolate from, and the level to check with
+                if (done[16] && done[32]) { lo = 16; hi = 32; ck = 8 }
+                else if (done[8] && done[16]) { lo = 8; hi = 16; ck = 0 }
+                else continue
+            }
             complete = 1; buf = ""
             for (i = 1; i <= nD && complete; i++) for (j = 1; j <= nm && complete; j++) {
                 row = ""
@@ -96,14 +103,17 @@ awk -F, -v OFS=, -v csv="$csv" '
                         if (!rel("K" k SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }
                         r = R + bias[i, j, q]; e = RE + biase[i, j, q]
                     } else {
-                        p = 2 * (3 - D[i]); s8 = 8 ^ -p; s16 = 16 ^ -p; s32 = 32 ^ -p
-                        if (!rel("K16" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r16 = R; e16 = RE
-                        if (!rel("K32" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r32 = R; e32 = RE
-                        if (!rel("K8" SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; r8 = R
-                        sl = (r16 - r32) / (s16 - s32); a = r32 - sl * s32
-                        chk = abs(a + sl * s8 - r8)
+                        # rel = a + b s, s = (k1/k2)^p, through the levels lo and hi (at 4π)
+                        p = 2 * (3 - D[i]); sl_ = lo ^ -p; sh = hi ^ -p
+                        if (!rel("K" lo SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; rl = R; el = RE
+                        if (!rel("K" hi SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }; rh = R; eh = RE
+                        b = (rl - rh) / (sl_ - sh); a = rh - b * sh
+                        if (ck) { # the check: the fit at the third level against its point
+                            if (!rel("K" ck SUBSEP D[i] SUBSEP M[j], q)) { complete = 0; break }
+                            chk = abs(a + b * ck ^ -p - R)
+                        } else chk = abs(a - rh) # no third level: the whole extrapolated step
                         r = a + bias[i, j, q]
-                        e = (e16 * s32 + e32 * s16) / (s16 - s32) + biase[i, j, q] + chk
+                        e = (el * sh + eh * sl_) / (sl_ - sh) + biase[i, j, q] + chk
                     }
                     vr[q] = r; ve[q] = e
                     h2 = k == 8 ? hrel("M8" SUBSEP D[i] SUBSEP M[j], 2, q) : "NAN"
@@ -117,10 +127,14 @@ awk -F, -v OFS=, -v csv="$csv" '
                                   bias[i, j, 0], bias[i, j, 1], bias[i, j, 2], vh2[0], vh2[1], vh2[2], vh4[0], vh4[1], vh4[2])
                 csvbuf = csvbuf row
             }
-            if (complete) { printf "%s", buf; printf "%s", csvbuf >> csv; n++ }
+            if (complete) { printf "%s", buf; printf "%s", csvbuf >> csv; n++; done[k] = 1 }
+            if (complete && k == "inf")
+                printf "%s", (ck ? "through k2/k1 = " lo " and " hi ", checked at " ck ": the error adds |the fit at " ck " - its point|" \
+                                 : "through k2/k1 = " lo " and " hi " only (no third level yet to check the form): the error adds the whole extrapolated step |rel(inf) - rel(" hi ")|") > cont
             csvbuf = ""
         }
     }' bench/results/theory_map.csv "$ext" "$k2f" >"$tmp"
+continuum=$(cat "$cont" 2>/dev/null || echo "not extrapolated: the map lacks two complete k2/k1 levels")
 
 levels=$(cut -d, -f1 "$csv" | sed 1d | sort -u | sort -g | tr '\n' ' ')
 # How far the discrete model is converged: the largest relative change of g_eq, sigma_max and
@@ -171,8 +185,7 @@ const ljgap_validity_how_info ljgap_validity_how = {
     "per shortest wave) tied to it by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
     4,
     "$convergence",
-    "rel = a + b (k1/k2)^p, p = 2(3 - D), through the k2/k1 = 16 and 32 points (plus the L bias); "
-    "error: theirs propagated, the L bias's, and |the fit at k2/k1 = 8 - the k2/k1 = 8 point|"};
+    "rel = a + b (k1/k2)^p, p = 2(3 - D), plus the L bias; $continuum; and the two points' errors propagated and the L bias's"};
 EOF
 } >"$out"
 echo "wrote $out ($rows rows; k2/k1 levels: $levels) and $csv"

@@ -3,8 +3,8 @@
  * from bench/results/theory_map.csv (the main map: k2/k1 = 8, L = 8π, n = 256), theory_map_ext.csv
  * (the same at m0 0.7 and 1) and theory_map_k2.csv (k2/k1 = 8, 16, 32 at L = 4π, n = 128, 256,
  * 512: 8 points per shortest wave), every case with 4 realizations (bench/theory_map.sh,
- * bench/theory_map_k2.sh). k2/k1 levels present: 8 16 (inf: the continuum k2 = ∞ by
- * extrapolation in k2). Rows: 54. What each column means: include/ljgap_validity.h.
+ * bench/theory_map_k2.sh). k2/k1 levels present: 8 16 inf (inf: the continuum k2 = ∞ by
+ * extrapolation in k2). Rows: 81. What each column means: include/ljgap_validity.h.
  */
 #include "ljgap_validity.h"
 
@@ -66,6 +66,33 @@ const ljgap_validity_row ljgap_validity_rows[] = {
     {16, 2.8, 0.5, {0.343381, -0.358751, -0.362236}, {0.022511, 0.048740, 0.030402}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
     {16, 2.8, 0.7, {0.329130, -0.387033, -0.376367}, {0.036392, 0.090343, 0.056784}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
     {16, 2.8, 1, {0.305324, -0.405214, -0.384461}, {0.042622, 0.101520, 0.064188}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.01, {0.000388, -0.007404, 0.001621}, {0.000182, 0.002571, 0.001028}, {-0.000335, 0.000608, 0.005664}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.02, {0.000818, -0.027853, -0.008120}, {0.000532, 0.005888, 0.001346}, {-0.000686, 0.001319, 0.003694}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.05, {0.003196, -0.113369, -0.045518}, {0.002584, 0.018184, 0.004112}, {-0.001768, 0.006223, 0.004980}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.1, {0.025206, -0.218727, -0.139088}, {0.009350, 0.028989, 0.013218}, {-0.003013, 0.014238, 0.008146}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.2, {0.246619, -0.324192, -0.301566}, {0.026468, 0.041983, 0.024978}, {-0.003770, 0.022812, 0.015001}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.3, {0.365146, -0.383786, -0.370624}, {0.032638, 0.056696, 0.031516}, {-0.008303, 0.030069, 0.022393}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.5, {0.438303, -0.451077, -0.431360}, {0.050675, 0.082516, 0.042540}, {-0.024863, 0.047663, 0.036769}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 0.7, {0.462350, -0.504263, -0.471617}, {0.078164, 0.140743, 0.083151}, {-0.024863, 0.047663, 0.036769}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.2, 1, {0.467362, -0.552529, -0.507913}, {0.086062, 0.141570, 0.088579}, {-0.024863, 0.047663, 0.036769}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.01, {0.000657, -0.010558, 0.001018}, {0.000420, 0.003818, 0.001054}, {-0.000383, 0.000227, 0.005873}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.02, {0.001648, -0.036163, -0.011302}, {0.001225, 0.010140, 0.002896}, {-0.000792, 0.000973, 0.003632}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.05, {0.009648, -0.133105, -0.063999}, {0.006178, 0.030034, 0.012812}, {-0.002021, 0.004608, 0.004526}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.1, {0.082292, -0.233964, -0.190657}, {0.033047, 0.044360, 0.036720}, {-0.003439, 0.010704, 0.007158}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.2, {0.323760, -0.328495, -0.331764}, {0.054046, 0.058523, 0.045565}, {-0.004983, 0.018314, 0.012727}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.3, {0.394611, -0.379167, -0.381818}, {0.050419, 0.072493, 0.050699}, {-0.009229, 0.024869, 0.018876}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.5, {0.423359, -0.431265, -0.421176}, {0.066566, 0.097031, 0.060944}, {-0.021151, 0.041644, 0.031002}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 0.7, {0.418041, -0.469703, -0.444599}, {0.089281, 0.150525, 0.095707}, {-0.021151, 0.041644, 0.031002}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.5, 1, {0.395352, -0.495463, -0.461715}, {0.098715, 0.162614, 0.102928}, {-0.021151, 0.041644, 0.031002}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.01, {0.001594, -0.014908, -0.000942}, {0.001488, 0.008830, 0.003099}, {-0.000390, 0.000022, 0.006021}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.02, {0.005229, -0.049500, -0.019898}, {0.004822, 0.025063, 0.010809}, {-0.000813, 0.000210, 0.003629}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.05, {0.039861, -0.154929, -0.113278}, {0.031114, 0.065430, 0.055243}, {-0.002040, 0.002102, 0.003510}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.1, {0.265927, -0.235287, -0.285480}, {0.171655, 0.085438, 0.123045}, {-0.003416, 0.005493, 0.005112}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.2, {0.387733, -0.294447, -0.346842}, {0.119233, 0.101465, 0.094850}, {-0.004984, 0.011240, 0.008588}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.3, {0.366570, -0.314425, -0.355321}, {0.062952, 0.129366, 0.087301}, {-0.006914, 0.017861, 0.012506}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.5, {0.317353, -0.322409, -0.342768}, {0.104855, 0.216876, 0.128310}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 0.7, {0.262672, -0.329831, -0.324878}, {0.189201, 0.325391, 0.217757}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
+    {INFINITY, 2.8, 1, {0.199123, -0.314177, -0.297886}, {0.272771, 0.436084, 0.301956}, {-0.010082, 0.033425, 0.021325}, {NAN, NAN, NAN}, {NAN, NAN, NAN}},
 };
 const size_t ljgap_validity_nrows = sizeof ljgap_validity_rows / sizeof ljgap_validity_rows[0];
 
@@ -76,5 +103,4 @@ const ljgap_validity_how_info ljgap_validity_how = {
     "per shortest wave) tied to it by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
     4,
     "largest change of g_eq, sigma_max, dgamma_eff over the convergence cases (D, m0 = 2.2, 0.1; 2.5, 0.2; 2.8, 0.5 at k2/k1 = 8 against L = 8π, n = 256: L4pi 5.6 %, n512 0.0 %, R8 1.0 %, L16pi 1.8 %; at k2/k1 = 32 (2.2, 0.1; 2.8, 0.5) against L = 4π, n = 512: not yet run; in L at every point: each row's L_bias, rel(8π) - rel(4π) at k2/k1 = 8 (n512, n1024: twice the points; R8: 8 realizations; L4pi, L16pi: the square)",
-    "rel = a + b (k1/k2)^p, p = 2(3 - D), through the k2/k1 = 16 and 32 points (plus the L bias); "
-    "error: theirs propagated, the L bias's, and |the fit at k2/k1 = 8 - the k2/k1 = 8 point|"};
+    "rel = a + b (k1/k2)^p, p = 2(3 - D), plus the L bias; through k2/k1 = 8 and 16 only (no third level yet to check the form): the error adds the whole extrapolated step |rel(inf) - rel(16)|; and the two points' errors propagated and the L bias's"};
