@@ -111,19 +111,19 @@
       });
     });
     ms.forEach((m, j) => s.append(svg("text", { x: left + cw * j + cw / 2, y: top + ch * Ds.length + 13, "text-anchor": "middle", class: "vm-axis" }, String(m))));
-    s.append(svg("text", { x: left + (cw * ms.length) / 2, y: H - 4, "text-anchor": "middle", class: "vm-axis" }, `m̃0 (cells: Δγeff, theory vs discrete, in %; k̃2/k̃1 = ${ratio(level)})`));
+    s.append(svg("text", { x: left + (cw * ms.length) / 2, y: H - 4, "text-anchor": "middle", class: "vm-axis" }, `m̃0 · k̃2/k̃1 = ${ratio(level)} · numbers: Δγeff, theory vs discrete, %`));
     if (model && model.at) {
       const lm = ms.map(Math.log);
       const px = left + cw * (place(lm, Math.log(model.at.m0)) + 0.5);
       const py = top + ch * (Ds.length - 1 - place(Ds, model.at.D) + 0.5);
-      s.append(svg("circle", { cx: px, cy: py, r: 6, class: model.inside ? "vm-marker" : "vm-marker vm-off", id: "validity-marker" }));
+      s.append(svg("circle", { cx: px, cy: py, r: 12, class: model.inside ? "vm-marker" : "vm-marker vm-off", id: "validity-marker" }));
     }
     const caption = document.createElement("div");
     caption.className = "meta";
     caption.textContent = model
       ? model.inside
-        ? `● this request (D = ${model.D.toFixed(3)}, m̃0 = ${+model.m0.toPrecision(3)}, k̃2/k̃1 = ${ratio(model.k2_over_k1)}) on the validity map; green: within 5 % of the discrete model`
-        : `○ off the map: ${model.reason}; marked at the nearest point`
+        ? `◯ this request (D = ${model.D.toFixed(3)}, m̃0 = ${+model.m0.toPrecision(3)}, k̃2/k̃1 = ${ratio(model.k2_over_k1)}) on the validity map. Colour: the largest difference of g̃eq, σ̄max, Δγeff: green within 5 %, amber to 20 %, red beyond`
+        : `◌ off the map: ${model.reason}; marked (dashed) at the nearest point`
       : "the validity map (GET /v1/validity); compute to see where the request sits";
     box.replaceChildren(s, caption);
   }
