@@ -12,7 +12,7 @@
 #   k2 = 8    the main map (L = 8π, n = 256, 4 realizations: theory_map.csv, with
 #             theory_map_ext.csv for m0 0.7 and 1); where L = 8π is missing, the L = 4π run plus
 #             the L bias of the nearest m0 that has both, that bias added to the error;
-#   k2 = 16, 32  the L = 4π runs (n = 256, 512: 8 points per shortest wave, 4 realizations,
+#   k2 = 16, 32  the L = 4π runs (n = 256 for both: 8 and 4 points per shortest wave, 4 realizations,
 #             theory_map_k2.csv) corrected by the L bias seen at k2 = 8:
 #             rel_k2(4π) - rel_8(4π) + rel_8(8π), errors added;
 #   continuum rel = a + b s, s = (k1/k2)^p, p = 2(3 - D) (the variance beyond k2 goes as
@@ -139,22 +139,30 @@ continuum=$(cat "$cont" 2>/dev/null || echo "not extrapolated: the map lacks two
 levels=$(cut -d, -f1 "$csv" | sed 1d | sort -u | sort -g | tr '\n' ' ')
 # How far the discrete model is converged: the largest relative change of g_eq, sigma_max and
 # dgamma_eff over the convergence cases, per case label, against the runs they repeat.
-conv() { # conv BASE_FILE BASE_LABEL CONV_FILE: "label <= x %, ..." (nothing when absent)
+conv() { # conv BASE_FILE BASE_LABEL CONV_FILE [NAME]: "label x %, ..." (nothing when absent;
+    # NAME replaces the convergence rows' label)
     [ -f "$1" ] && [ -f "$3" ] || return 0
-    awk -F, -v base="$2" '
+    awk -F, -v base="$2" -v name="${4:-}" '
         FNR == 1 || /^#/ || $4 != "discrete" { next }
         FILENAME == ARGV[1] { if ($1 == base) for (q = 10; q <= 16; q += 2) b[$2, $3 + 0, q] = $q; next }
-        { for (q = 10; q <= 16; q += 2) { if (q == 14 || !(($2, $3 + 0, q) in b)) continue
+        { if (name != "") $1 = name
+          for (q = 10; q <= 16; q += 2) { if (q == 14 || !(($2, $3 + 0, q) in b)) continue
               d = ($q - b[$2, $3 + 0, q]) / b[$2, $3 + 0, q]; d = d < 0 ? -d : d
               if (!($1 in mx)) order[++n] = $1
               if (d > mx[$1]) mx[$1] = d; cases[$1, $2 "/" $3] = 1 } }
         END { for (i = 1; i <= n; i++) printf "%s%s %.1f %%", (i > 1 ? ", " : ""), order[i], 100 * mx[order[i]] }' "$1" "$3"
 }
 c8=$(conv "$res/theory_map.csv" map "$res/theory_map_convergence.csv")
-c32=$(conv "$k2f" k2_32 "$res/theory_map_conv32.csv")
+c32=$(conv "$k2f" k2_32 "$res/theory_map_conv32.csv" "L8pi (n = 512)")
+n32=$(conv "$k2f" k2_32 "$res/theory_map_k2_n512.csv" "n512 (D = 2.2, m0 0.01 to 0.3)")
+[ -n "$n32" ] && c32="${c32:+$c32, }$n32"
+# the grid of each level, from the runs themselves: "k2/k1 = K: L = 4π, n = N"
+grids=$(awk -F, '$4 == "discrete" && $1 ~ /^k2_/ { k = substr($1, 4); if (!((k, $6) in seen)) { seen[k, $6] = 1; g[k] = g[k] (g[k] ? "/" : "") $6 } }
+    END { for (k in g) print k, g[k] }' "$k2f" | sort -n |
+    awk '{ printf "%s%s on n = %s (%s points per shortest wave)", (NR > 1 ? ", " : ""), $1, $2, $2 / (2 * $1) }')
 convergence="largest change of g_eq, sigma_max, dgamma_eff over the convergence cases (D, m0 = 2.2, 0.1; 2.5, 0.2; 2.8, 0.5 at k2/k1 = 8"
-convergence="$convergence against L = 8π, n = 256: ${c8:-not run}; at k2/k1 = 32 (2.2, 0.1; 2.8, 0.5) against L = 4π, n = 512: ${c32:-not yet run}"
-convergence="$convergence; in L at every point: each row's L_bias, rel(8π) - rel(4π) at k2/k1 = 8 (n512, n1024: twice the points; R8: 8 realizations; L4pi, L16pi: the square)"
+convergence="$convergence against L = 8π, n = 256: ${c8:-not run}; at k2/k1 = 32 against L = 4π, n = 256: ${c32:-not yet run}"
+convergence="$convergence; in L at every point: each row's L_bias, rel(8π) - rel(4π) at k2/k1 = 8 (n512: twice the points; R8: 8 realizations; L4pi, L8pi, L16pi: the square)"
 rows=$(grep -c '^    {' "$tmp" || true)
 {
     cat <<EOF
@@ -162,7 +170,7 @@ rows=$(grep -c '^    {' "$tmp" || true)
  *   bench/validity_table.sh
  * from bench/results/theory_map.csv (the main map: k2/k1 = 8, L = 8π, n = 256), theory_map_ext.csv
  * (the same at m0 0.7 and 1) and theory_map_k2.csv (k2/k1 = 8, 16, 32 at L = 4π, n = 128, 256,
- * 512: 8 points per shortest wave), every case with 4 realizations (bench/theory_map.sh,
+ * 256), every case with 4 realizations (bench/theory_map.sh,
  * bench/theory_map_k2.sh). k2/k1 levels present: $levels(inf: the continuum k2 = ∞ by
  * extrapolation in k2). Rows: $rows. What each column means: include/ljgap_validity.h.
  */
@@ -181,8 +189,8 @@ const size_t ljgap_validity_nrows = sizeof ljgap_validity_rows / sizeof ljgap_va
 const ljgap_validity_how_info ljgap_validity_how = {
     "BUILD=build bench/theory_map.sh; BUILD=build bench/theory_map_k2.sh; bench/validity_table.sh",
     "the discrete model of docs/model.md, k1 = 1: k2/k1 = 8 on L = 8π, n = 256 (4 points per "
-    "shortest wave; the main map), and k2/k1 = 8, 16, 32 on L = 4π, n = 128, 256, 512 (8 points "
-    "per shortest wave) tied to it by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
+    "shortest wave; the main map), and on L = 4π k2/k1 = ${grids:-none}, "
+    "tied to the main map by the L bias at k2/k1 = 8; the theory by the PDE at tol 1e-6",
     4,
     "$convergence",
     "rel = a + b (k1/k2)^p, p = 2(3 - D), plus the L bias; $continuum; and the two points' errors propagated and the L bias's"};
