@@ -471,6 +471,8 @@ test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on 
   const ad = await page.textContent("#readout-topo-adhesion");
   assert.match(ad, /Δγeff\/Δγ/);
   assert.match(ad, new RegExp(`to k2 = `));
+  /* the measured table's model: read as a table (its variance-weighted D), said on or off the map */
+  assert.match(await page.textContent("#readout-topo-adhesion .validity-line"), /model: /);
   const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
   const adReq = json.requests.find((r) => r.label === "adhesion").body;
   assert.equal(adReq.units, "SI");
