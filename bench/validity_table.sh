@@ -36,7 +36,7 @@ cont=$(mktemp)
 trap 'rm -f "$tmp" "$cont"' EXIT
 awk -F, -v OFS=, -v csv="$csv" -v cont="$cont" '
     function abs(x) { return x < 0 ? -x : x }
-    FNR == 1 || /^#/ || $1 == "label" { next }
+    /^#/ || $1 == "label" { next }
     {
         # which run: the main map at 8π (label map) or a k2 run at 4π (label k2_K)
         if ($1 == "map") set = "M8"; else if ($1 ~ /^k2_/) set = "K" substr($1, 4); else next
@@ -143,7 +143,7 @@ conv() { # conv BASE_FILE BASE_LABEL CONV_FILE [NAME]: "label x %, ..." (nothing
     # NAME replaces the convergence rows' label)
     [ -f "$1" ] && [ -f "$3" ] || return 0
     awk -F, -v base="$2" -v name="${4:-}" '
-        FNR == 1 || /^#/ || $4 != "discrete" { next }
+        /^#/ || $1 == "label" || $4 != "discrete" { next }
         FILENAME == ARGV[1] { if ($1 == base) for (q = 10; q <= 16; q += 2) b[$2, $3 + 0, q] = $q; next }
         { if (name != "") $1 = name
           for (q = 10; q <= 16; q += 2) { if (q == 14 || !(($2, $3 + 0, q) in b)) continue

@@ -11,6 +11,8 @@
  *   bench/theory_map.sh's own awk, bench/results/theory_map_rel.csv (from the main map alone).
  * - The k2/k1 = 16 and 32 rows are the L = 4π runs tied to the main map by the L bias at 8,
  *   rel_k(4π) - rel_8(4π) + rel_8(8π), computed here from the bench's CSVs.
+ * - The L bias carried from 8 to 32 holds: the discrete model at k2/k1 = 32 on L = 8π (three
+ *   cases) gives the table's k2/k1 = 32 differences within the table's error and its own.
  * - A table PSD sampled from a power law has that power law's D, m0 and ends; a table with a
  *   knee (D 2.2 then 2.9) is not power-law-like.
  */
@@ -280,6 +282,42 @@ static void tied_by_L_bias(void **state)
     assert_true(levels == 0 || checked >= 27);
 }
 
+/* The L bias carried from k2/k1 = 8 to 32, checked directly: the discrete model at k2/k1 = 32 on
+ * L = 8π (bench/results/theory_map_conv32.csv) against the theory, within the table's error. */
+static void L_bias_holds_at_32(void **state)
+{
+    (void)state;
+    static k2run runs[200];
+    size_t n = read_k2(runs, 200), checked = 0;
+    FILE *f = fopen("bench/results/theory_map_conv32.csv", "r");
+    char line[512], label[32], model[32];
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f)) {
+        double D, m0, v[8];
+        if (sscanf(line,
+                   "%31[^,],%lf,%lf,%31[^,],%*[^,],%*[^,],%*[^,],%*[^,],%*[^,],%lf,%lf,%lf,%lf,%lf,"
+                   "%lf,%lf,%lf",
+                   label, &D, &m0, model, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
+                   &v[7]) != 12 ||
+            strcmp(label, "k2_32_L8pi") || strcmp(model, "discrete"))
+            continue;
+        const k2run *k = find_k2(runs, n, "k2_32", D, m0);
+        const ljgap_validity_row *r = row_at(32, D, m0);
+        assert_non_null(k);
+        assert_non_null(r);
+        const double d8pi[3] = {v[0], v[2], v[6]}, e8pi[3] = {v[1], v[3], v[7]};
+        for (int q = 0; q < LJGAP_V_N; q++) {
+            double rel = k->th[q] / d8pi[q] - 1, err = fabs(1 + rel) * e8pi[q] / fabs(d8pi[q]);
+            if (!(fabs(rel - r->rel[q]) <= r->err[q] + err))
+                fail_msg("D %g m0 %g q %d: L = 8π gives %.4f ± %.4f, the table %.4f ± %.4f", D, m0,
+                         q, rel, err, r->rel[q], r->err[q]);
+        }
+        checked++;
+    }
+    fclose(f);
+    assert_true(checked >= 2);
+}
+
 static void table_psd(void **state)
 {
     (void)state;
@@ -324,7 +362,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(exact_at_points), cmocka_unit_test(monotone_between),
         cmocka_unit_test(outside_reasons), cmocka_unit_test(agrees_with_bench),
-        cmocka_unit_test(tied_by_L_bias),  cmocka_unit_test(table_psd),
+        cmocka_unit_test(tied_by_L_bias),  cmocka_unit_test(L_bias_holds_at_32),
+        cmocka_unit_test(table_psd),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
