@@ -154,7 +154,7 @@ conv() { # conv BASE_FILE BASE_LABEL CONV_FILE [NAME]: "label x %, ..." (nothing
 }
 c8=$(conv "$res/theory_map.csv" map "$res/theory_map_convergence.csv")
 c32=$(conv "$k2f" k2_32 "$res/theory_map_conv32.csv" "L8pi (n = 512)")
-n32=$(conv "$k2f" k2_32 "$res/theory_map_k2_n512.csv" "n512 (D = 2.2, m0 0.01 to 0.3)")
+n32=$(conv "$k2f" k2_32 "$res/theory_map_k2_n512.csv" "n512 (D = 2.2, m0 0.01 to 0.2)")
 [ -n "$n32" ] && c32="${c32:+$c32, }$n32"
 # the grid of each level, from the runs themselves: "k2/k1 = K: L = 4π, n = N"
 grids=$(awk -F, '$4 == "discrete" && $1 ~ /^k2_/ { k = substr($1, 4); if (!((k, $6) in seen)) { seen[k, $6] = 1; g[k] = g[k] (g[k] ? "/" : "") $6 } }
