@@ -69,7 +69,7 @@ CORE_SRC := $(wildcard core/*.c core/sim/*.c core/topo/*.c)
 # server/: the request layer (api/: the handler, validation, answers, CSV, problems), the
 # instrument-file readers (files/) and the job
 # store (jobs/), in one archive; the CLI (cli/) and the daemon (ljgapd/) link it.
-SERVER_SRC := $(wildcard server/api/*.c server/uncert/*.c server/jobs/*.c server/files/*.c)
+SERVER_SRC := $(wildcard server/api/*.c server/api/*/*.c server/uncert/*.c server/jobs/*.c server/files/*.c)
 # The daemon's own files (server/ljgapd/): all but main.c also go into an archive that the unit
 # tests link (the scheduler and the connection records are tested without HTTP).
 DAEMON_SRC := $(filter-out server/ljgapd/main.c,$(wildcard server/ljgapd/*.c))

@@ -14,6 +14,9 @@
 #   bench/results/theory_map.txt              the same as a table
 #   bench/results/theory_map.png              the differences against m0 (gnuplot)
 #   BUILD=build bench/theory_map.sh [--report]   (--report: only redo the table and the plot)
+# bench/theory_map_k2.sh extends the map to k2/k1 = 16, 32 and m0 up to 1, and
+# bench/validity_table.sh turns both into the table every answer's "model" reads
+# (core/validity_table.c, GET /v1/validity).
 set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}

@@ -18,7 +18,7 @@ FUZZ_BIN := $(FUZZ_DIR)/fuzz_handler
 FUZZ_REPLAY := $(FUZZ_DIR)/replay
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
 # The same sources as the libraries (the Makefile's lists are set after this file is read).
-FUZZ_SRC := $(wildcard core/*.c core/sim/*.c core/topo/*.c server/api/*.c server/uncert/*.c server/jobs/*.c server/files/*.c) \
+FUZZ_SRC := $(wildcard core/*.c core/sim/*.c core/topo/*.c server/api/*.c server/api/*/*.c server/uncert/*.c server/jobs/*.c server/files/*.c) \
             server/ljgapd/budget.c server/ljgapd/forwarded.c
 FUZZ_OBJ := $(FUZZ_SRC:%.c=$(FUZZ_DIR)/obj/%.o)
 # the instrument-file readers' target (issue 28) and its replay, seeded by tests/fuzz/files_corpus

@@ -459,6 +459,7 @@
         `curve: ${g.length} points, largest error ${errFmt(maxAbs(ans.error.sigma))}; shaded: the area beyond g̃eq (Δγeff)${ie ? "; orange band: ± the measurement's uncertainty (input_error, 1 σ)" : ""}`
       ),
       forLine(p),
+      LJValidity.line(ans.model),
       metaLine(ans),
       ...warnings(ans)
     );
@@ -496,7 +497,7 @@
           )
         );
       });
-      metas.push(metaLine(ans), ...warnings(ans));
+      metas.push(LJValidity.line(ans.model), metaLine(ans), ...warnings(ans));
     }
     /* the x axis over where the densities live (Φ above 1e-4 of its peak), not the whole grid */
     let lo = Infinity;
@@ -588,7 +589,7 @@
     });
     const worstAll = Math.max(...r.map((o) => Math.max(...Object.values((o && o.error) || {}).map(Math.abs))));
     const details = el("details", {}, el("summary", {}, `${x.length} points, largest error ${errFmt(worstAll)}: table`), t);
-    $("readout-sweep").replaceChildren(details, forLine(p), metaLine(ans), ...warnings(ans));
+    $("readout-sweep").replaceChildren(details, forLine(p), LJValidity.sweepLine(r), metaLine(ans), ...warnings(ans));
   }
 
   /* The PSD as the form gives it (client side: a picture of the input, with its cut-offs). */
@@ -655,6 +656,7 @@
       marks,
     });
     $("readout-psd").replaceChildren(el("div", { class: "meta" }, notes.join(" · ") || "table as given"));
+    LJValidity.draw($("validity-map"), traction && traction.model); /* where the request sits on the map */
   }
 
   function showContact(p, ans) {
@@ -671,7 +673,7 @@
     p.series = [{ name: "pull_off_N", x: Object.keys(po), y: Object.values(po), err: Object.keys(po).map((k) => pe[k]) }];
     p.xName = "model";
     $("card-contact").hidden = false;
-    $("readout-contact").replaceChildren(t, forLine(p), metaLine(ans), ...warnings(ans));
+    $("readout-contact").replaceChildren(t, forLine(p), LJValidity.line(ans.model), metaLine(ans), ...warnings(ans));
   }
 
   /* A problem answer of panel's request: beside the fields its pointers name, the rest in the

@@ -592,6 +592,7 @@ const LJTopo = (() => {
     ro.replaceChildren(
       api.el("div", { class: "meta" }, `${body.psd.k.length} points from k1 = ${api.fmt(k1, 4)} to ${k2 === null ? "∞ (fitted tail)" : `k2 = ${api.fmt(k2, 4)}`} 1/m`),
       api.summaryTable(a, a.error, a.si, a.si && a.si.error),
+      LJValidity.line(a.model),
       api.metaLine(a),
       ...api.warnings(a)
     );

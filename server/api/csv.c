@@ -97,7 +97,8 @@ static void put_value(ljgap_textbuf *b, const cJSON *v, const char *name, int ce
 static void comment(ljgap_textbuf *b, const char *path, const char *name, const cJSON *v,
                     const cJSON *err)
 {
-    const char *u = unit_of(name);
+    /* the model's relative differences (validity.c) are pure numbers, whatever their name */
+    const char *u = strstr(path, "model.vs_discrete") ? NULL : unit_of(name);
     ljgap_textbuf_printf(b, "# %s", path);
     if (u && (cJSON_IsNumber(v) || cJSON_IsNull(v))) ljgap_textbuf_printf(b, " [%s]", u);
     ljgap_textbuf_printf(b, " = ");
@@ -310,6 +311,15 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
     ljgap_textbuf_printf(b, "# ljgap sweep: the adhesion quantities for each value of the "
                             "varied PSD field, one row per value\n");
     comments(b, "", ans, NULL);
+    for (int k = 0; k < 2; k++) { /* each result's model (validity.c), and its copy in si */
+        const cJSON *list = k ? sires : res;
+        int i = 0;
+        for (const cJSON *r = list ? list->child : NULL; r; r = r->next, i++) {
+            char p[64];
+            snprintf(p, sizeof p, "%sresults[%d].model", k ? "si." : "", i);
+            if (cJSON_IsObject(get(r, "model"))) comments(b, p, get(r, "model"), NULL);
+        }
+    }
     add(c, &n, "values", vary_unit(cJSON_GetStringValue(vary), si_psd), get(ans, "values"), 0);
     /* one array per field (and error): result i's member, or null when the value failed */
     for (size_t f = 0; ok && f < sizeof fields / sizeof fields[0]; f++) {

@@ -53,6 +53,7 @@
 #include "request.h"
 #include "textbuf.h"   /* ljgap_utf8_span */
 #include "topo_text.h" /* the text upload of psd */
+#include "validity/validity.h" /* the answers' "model" */
 
 #include <math.h>
 #include <pthread.h>
@@ -323,6 +324,7 @@ static int run_adhesion(job *j)
     ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
     put_si(j, j->ans, &sum);
     ljgap_ie_adhesion(j, &sum);
+    ljgap_ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 
@@ -361,6 +363,7 @@ static int run_traction(job *j)
         free(pt);
     }
     ljgap_ie_traction(j, &sum);
+    ljgap_ans_model(j, &rq->psd);
 end:
     free(sigma);
     return st;
@@ -424,6 +427,7 @@ static int run_pdf(job *j)
         put_num(j, e, "sigma", p[i].sigma.err, "error.pdfs.sigma", (long)i);
     }
     ljgap_ie_pdf(j);
+    ljgap_ans_model(j, &rq->psd);
 end:
     if (p) ljgap_pdf_release(p, rq->nx);
     free(p);
@@ -525,6 +529,7 @@ static int run_sweep(job *j)
         } else if (sir)
             put(j, sir, NULL, cJSON_CreateNull());
     }
+    ljgap_ans_model_sweep(j);
     if (failed == rq->nx) {
         snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
         st = LJGAP_EFAIL;
@@ -574,6 +579,7 @@ static int run_contact(job *j)
     put_num(j, j->ans, "R", j->rq.R, "R", -1);
     put_si(j, j->ans, &sum);
     ljgap_ie_contact(j, &sum);
+    ljgap_ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 

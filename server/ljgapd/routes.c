@@ -3,7 +3,7 @@
  * One flat table, first match wins, the last row answers 404. A row names its path (exact, or
  * a prefix ending in '/' with a predicate saying whether the rest exists), the methods it
  * allows (anything else is 405 with Allow), whether it reads a JSON body, and the function
- * that answers. /healthz, /version and /openapi.json answer on the I/O thread at once: they
+ * that answers. /healthz, /version, /openapi.json and /v1/validity answer on the I/O thread at once: they
  * never wait for anything. The simulation job routes call the job store, which may wait (a
  * lock, a disk, a DELETE waiting for a job to stop), so they run on ljgapd_srv.ops (work.c).
  *
@@ -30,6 +30,7 @@
 #include "ljgap.h"
 #include "ljgap_sim.h"
 #include "problems.h"
+#include "validity/validity.h"
 
 #include <cjson/cJSON.h>
 #include <gsl/gsl_version.h>
@@ -88,6 +89,14 @@ static enum MHD_Result route_version(struct MHD_Connection *c, request *r)
     ret = ljgapd_respond_json(c, r, MHD_HTTP_OK, "application/json", text, strlen(text));
     cJSON_free(text);
     return ret;
+}
+
+/* GET /v1/validity: the validity map (server/api/validity.c), on the I/O thread: no computing. */
+static enum MHD_Result route_validity(struct MHD_Connection *c, request *r)
+{
+    ljgap_reply rep;
+    ljgap_validity_reply(&rep);
+    return ljgapd_respond_reply(c, r, &rep);
 }
 
 static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
@@ -316,6 +325,7 @@ static const struct route routes[] = {
     {SIM_PATH, NULL, "POST", 1, route_sim_submit, 0},
     {SIM_PATH "/", sim_id_exists, "GET, HEAD, DELETE", 0, route_sim_job, 0},
     {"/v1/psd", NULL, "POST", 1, ljgapd_route_psd, LJGAP_TEXT_MAX_BYTES},
+    {"/v1/validity", NULL, "GET, HEAD", 0, route_validity, 0},
     {"/v1/", ljgapd_compute_exists, "POST", 1, ljgapd_route_compute, 0},
     {LJGAP_PROBLEM_BASE, problems_exists, "GET, HEAD", 0, route_problems, 0},
     {"/", ljgapd_static_exists, "GET, HEAD", 0, ljgapd_route_static, 0},

@@ -218,7 +218,7 @@ async function memory() {
 // ---- 3. the service routes and the page ----
 
 async function service() {
-  for (const [path, other] of [["/healthz", "POST"], ["/version", "DELETE"], ["/openapi.json", "PUT"], ["/problems/", "POST"]]) {
+  for (const [path, other] of [["/healthz", "POST"], ["/version", "DELETE"], ["/openapi.json", "PUT"], ["/v1/validity", "POST"], ["/problems/", "POST"]]) {
     check("GET", "GET", path, await call("GET", path), { status: 200 });
     check(other, other, path, await call(other, path), { status: 405 });
   }

@@ -78,6 +78,20 @@ check "GET /version: program, version and the three library versions" eval '[ "$
 version=$(sed -n 's/^#define LJGAP_VERSION "\(.*\)"/\1/p' include/ljgap.h)
 check "/version matches LJGAP_VERSION ($version)" json --arg v "$version" '.version == $v'
 
+req GET /v1/validity
+check "GET /v1/validity: the validity map, rows over D, m0 and k2/k1, how it was made, meta" \
+    eval '[ "$STATUS" = 200 ] && json "(.map.rows | length) >= 27
+        and (.map.D == [2.2, 2.5, 2.8]) and (.map.rows[0].vs_discrete | has(\"dgamma_eff\"))
+        and (.how.command | test(\"validity_table\")) and .meta.method == \"validity map\""'
+req POST /v1/validity -H 'Content-Type: application/json' -d '{}'
+check "POST /v1/validity: 405 problem with Allow: GET, HEAD" \
+    eval 'problem 405 && [ "$(hdr Allow)" = "GET, HEAD" ]'
+req POST /v1/adhesion -H 'Content-Type: application/json' \
+    -d '{"psd":{"kind":"power","D":2.5,"k1":1,"k2":8,"m0":0.5}}'
+check "POST /v1/adhesion at m0 = 0.5: the model is over 5 % off and the answer names the hybrid" \
+    json '.model.inside and (.model.vs_discrete.dgamma_eff < -0.05)
+        and any(.meta.warnings[]; test("k_split"))'
+
 req GET /openapi.json
 check "GET /openapi.json: OpenAPI 3 JSON" \
     eval '[ "$STATUS" = 200 ] && json ".openapi | startswith(\"3.\")"'
@@ -87,7 +101,7 @@ for p in /v1/adhesion /v1/traction /v1/pdf /v1/sweep /v1/contact /v1/simulations
         json --arg p "$p" '.paths[$p].post.responses | has("400") and has("413") and has("415")
             and has("422") and has("503")'
 done
-for p in /healthz /version /openapi.json /; do
+for p in /healthz /version /v1/validity /openapi.json /; do
     check "openapi: GET $p" json --arg p "$p" '.paths[$p].get.responses["200"]'
 done
 check "openapi: 404 and 405 problems, Retry-After and Allow headers, the Problem schema" \

@@ -172,6 +172,46 @@ test("Fig. 4 preset: traction curve, g_eq and sigma_max marked, readouts match t
   assert.ok(values.length >= 3 && values.slice(0, 3).every((v) => Number.isFinite(Number(v))), `legend ${values}`);
 });
 
+test("issue 31: each answer's model line, and the validity map with the request on the PSD card", async () => {
+  await runAndWait('[data-preset="fig4"]'); /* m0 = 0.5: the theory is far from the discrete model */
+  const warn = await page.textContent("#readout-traction .validity-line");
+  assert.match(warn, /^⚠ model: the theory differs from the discrete model by .*k_split/, warn);
+  const map = await (await fetch(`${origin}/v1/validity`)).json();
+  await page.waitForSelector("#validity-map svg #validity-marker");
+  assert.equal(await page.$$eval("#validity-map svg rect", (r) => r.length), map.map.D.length * map.map.m0.length);
+  /* the marker sits in the cell of D = 2.5, m0 = 0.5 (the preset is a point of the map's grid) */
+  const inCell = await page.evaluate(() => {
+    const m = document.getElementById("validity-marker").getBoundingClientRect();
+    const cx = (m.left + m.right) / 2, cy = (m.top + m.bottom) / 2;
+    const hit = [...document.querySelectorAll("#validity-map rect")].find((r) => {
+      const b = r.getBoundingClientRect();
+      return cx >= b.left && cx <= b.right && cy >= b.top && cy <= b.bottom;
+    });
+    return hit && hit.querySelector("title").textContent;
+  });
+  assert.match(inCell || "", /^D 2\.5, m̃0 0\.5:/);
+  await page.locator("#card-psd").screenshot({ path: path.join(BUILD, "web-screenshot-validity.png") });
+  /* inside the 5 % zone: the line says within, no warning */
+  await page.selectOption("#level-kind", "m0");
+  await page.fill("#level", "0.01");
+  await page.uncheck("#k2-inf");
+  await page.fill("#k2", "8");
+  await page.uncheck("#do-pdf");
+  await page.uncheck("#do-sweep");
+  await runAndWait("#compute");
+  const ok = await page.textContent("#readout-traction .validity-line");
+  assert.match(ok, /^model: theory within \d\.\d % of the discrete model/, ok);
+  assert.equal(await page.$$eval("#readout-traction .warn", (w) => w.length), 0);
+  await page.setViewportSize({ width: 390, height: 844 });
+  const box = await page.evaluate(() => document.querySelector("#validity-map svg").getBoundingClientRect().right);
+  assert.ok(box <= 390, `the map ends at ${box} px at 390`);
+  await page.setViewportSize({ width: 1400, height: 1000 });
+  await page.check("#k2-inf");
+  await page.check("#do-pdf");
+  await page.check("#do-sweep");
+  await page.selectOption("#level-kind", "C");
+});
+
 test("Fig. 3 preset: five gap PDFs, unit mass, peaks of theory.md §4", async () => {
   assert.match(await runAndWait('[data-preset="fig3"]'), /^Done/);
   assert.ok((await inked("plot-pdf")) > 2000, "PDF canvas is blank");
@@ -459,6 +499,8 @@ test("measured topography: upload, PSD and fit on log axes, k1 and k2 picked on 
   const ad = await page.textContent("#readout-topo-adhesion");
   assert.match(ad, /Δγeff\/Δγ/);
   assert.match(ad, new RegExp(`to k2 = `));
+  /* the measured table's model: read as a table (its variance-weighted D), said on or off the map */
+  assert.match(await page.textContent("#readout-topo-adhesion .validity-line"), /model: /);
   const json = await page.evaluate(() => JSON.parse(LJApp.panelJSON("topo")));
   const adReq = json.requests.find((r) => r.label === "adhesion").body;
   assert.equal(adReq.units, "SI");
