@@ -93,7 +93,6 @@ void ljgap_ans_meta(job *j, double t0);
 void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
                        const ljgap_summary *s);
 /* prefix, then the warnings of w, into buf. */
-void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
 
 /* The 422 validation problem of ve's errors (taken) into *out. */
 void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve);

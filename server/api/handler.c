@@ -621,14 +621,6 @@ int ljgap_handler_has(const char *endpoint)
     return endpoint_find(endpoint) != NULL;
 }
 
-/* "; "-joined warnings after prefix into buf. */
-void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
-{
-    size_t used = (size_t)snprintf(buf, size, "%s", prefix);
-    for (int i = 0; i < w->n && used < size; i++)
-        used += (size_t)snprintf(buf + used, size - used, "%s%s", i ? "; " : ": ", w->msg[i]);
-}
-
 /* The problem for a failed core status. */
 void ljgap_ans_status(ljgap_reply *out, int st, const job *j)
 {

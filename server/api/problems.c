@@ -8,6 +8,7 @@
  */
 #include "problems.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -209,4 +210,12 @@ void ljgap_problem_page(const char *rest, ljgap_reply *out)
     out->body = b.s;
     out->len = b.len;
     out->content_type = "text/html; charset=utf-8";
+}
+
+/* "; "-joined warnings after prefix into buf. */
+void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
+{
+    size_t used = (size_t)snprintf(buf, size, "%s", prefix);
+    for (int i = 0; i < w->n && used < size; i++)
+        used += (size_t)snprintf(buf + used, size - used, "%s%s", i ? "; " : ": ", w->msg[i]);
 }

@@ -9,6 +9,7 @@
 #ifndef LJGAP_PROBLEMS_H
 #define LJGAP_PROBLEMS_H
 
+#include "ljgap.h" /* ljgap_warnings */
 #include "reply.h"
 
 #define LJGAP_PROBLEM_BASE "/problems/" /* every problem type starts with this */
@@ -34,5 +35,8 @@ void ljgap_problem_page(const char *rest, ljgap_reply *out);
 /* A problem answer of type /problems/SLUG (its status and title from the table above) with this
  * detail and an empty errors[]. */
 void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail);
+
+/* "; "-joined warnings after prefix into buf (a problem's detail). */
+void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
 
 #endif

@@ -14,6 +14,7 @@
 #include "handler.h"
 #include "accept.h"
 #include "ljgap_sim.h"
+#include "problems.h" /* ljgap_ans_join_warnings */
 
 #include <math.h>
 #include <stdio.h>
