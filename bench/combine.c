@@ -60,19 +60,19 @@ int main(int argc, char **argv)
     o += sprintf(o, "]}");
     for (int r = 0; r < runs; r++) {
         ljgap_combine_result res;
-        ljgap_reply rep;
+        ljgap__reply rep;
         double t0 = ljgap__now();
         int st = ljgap_combine(in, M, NULL, &res, NULL);
         t_core[r] = 1e3 * (ljgap__now() - t0);
         ljgap_combine_result_free(&res);
         t0 = ljgap__now();
-        ljgap_handle("psd/combine", body, strlen(body), &rep);
+        ljgap__handle("psd/combine", body, strlen(body), &rep);
         t_all[r] = 1e3 * (ljgap__now() - t0);
         if (st || rep.status != 200) {
             fprintf(stderr, "combine: status %d, %d: %.300s\n", st, rep.status, rep.body);
             return 1;
         }
-        ljgap_reply_free(&rep);
+        ljgap__reply_free(&rep);
     }
     printf("combine of %d PSDs of %d points (%zu bytes of JSON), %d runs\n", M, N, strlen(body),
            runs);

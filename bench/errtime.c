@@ -135,13 +135,13 @@ static int run_job(void *ctx, int i)
     }
     if (J->q == Q_DGAMMA) {
         if (pde)
-            return ljgap_pde_summary_at_level(psd_fig4, PDE_G_LO, PDE_G_HI, (int)J->x, &J->sum);
+            return ljgap__pde_summary_at_level(psd_fig4, PDE_G_LO, PDE_G_HI, (int)J->x, &J->sum);
         if (paper) return ljgap__paper_summary_at(psd_fig4, &o, J->x, &J->sum);
         return ljgap_traction(psd_fig4, &o, NULL, 0, NULL, &J->sum, &w);
     }
     double k2 = PDF_K2;
     if (pde)
-        return ljgap_pde_pdf_at_level(psd_fig2, PDF_GAVE, k2, PDF_G_LO, PDF_G_HI, (int)J->x,
+        return ljgap__pde_pdf_at_level(psd_fig2, PDF_GAVE, k2, PDF_G_LO, PDF_G_HI, (int)J->x,
                                       &J->pdf);
     if (paper) return ljgap__paper_pdf_at(psd_fig2, &o, J->x, PDF_GAVE, k2, NULL, &J->pdf);
     if (mc) {

@@ -1,5 +1,5 @@
 /* files.c -- build/bench/files FILE [RUNS]: the time to read an instrument file (server/files/,
- * ljgap_files_read) and to answer POST /v1/psd with it (ljgap_handle_file: the read, the PSD,
+ * ljgap__files_read) and to answer POST /v1/psd with it (ljgap__handle_file: the read, the PSD,
  * the JSON), each the median and the extremes of RUNS runs (default 7). bench/files.sh makes a
  * 2048² 32-bit NanoScope file and runs it (issue 28 asks for under 1 s to the PSD).
  */
@@ -41,11 +41,11 @@ int main(int argc, char **argv)
     if (!buf || fread(buf, 1, len, f) != len) return 2;
     fclose(f);
     gsl_set_error_handler_off();
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     for (int i = 0; i < runs; i++) {
         double t0 = now();
-        int st = ljgap_files_read(buf, len, NULL, NULL, &m, &e);
+        int st = ljgap__files_read(buf, len, NULL, NULL, &m, &e);
         tr[i] = now() - t0;
         if (st) {
             fprintf(stderr, "read: %d %s\n", st, e.msg);
@@ -55,24 +55,24 @@ int main(int argc, char **argv)
             printf("file: %s, %zu bytes, %s, %zu x %zu points, channel %s\n",
                    strrchr(argv[1], '/') ? strrchr(argv[1], '/') + 1 : argv[1], len, m.format, m.nx,
                    m.ny, m.channel);
-        ljgap_files_map_free(&m);
+        ljgap__files_map_free(&m);
     }
     for (int i = 0; i < runs; i++) {
-        ljgap_reply r;
+        ljgap__reply r;
         double t0 = now();
-        ljgap_handle_file("psd", NULL, 0, buf, len, NULL, &r);
+        ljgap__handle_file("psd", NULL, 0, buf, len, NULL, &r);
         th[i] = now() - t0;
         if (r.status != 200) {
             fprintf(stderr, "psd: %d %.300s\n", r.status, r.body);
             return 1;
         }
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
     qsort(tr, (size_t)runs, sizeof *tr, cmp);
     qsort(th, (size_t)runs, sizeof *th, cmp);
-    printf("read (ljgap_files_read):             median %.3f s (%.3f ... %.3f), %d runs\n",
+    printf("read (ljgap__files_read):             median %.3f s (%.3f ... %.3f), %d runs\n",
            tr[runs / 2], tr[0], tr[runs - 1], runs);
-    printf("to the PSD (ljgap_handle_file, all): median %.3f s (%.3f ... %.3f), %d runs\n",
+    printf("to the PSD (ljgap__handle_file, all): median %.3f s (%.3f ... %.3f), %d runs\n",
            th[runs / 2], th[0], th[runs - 1], runs);
     free(buf);
     return 0;

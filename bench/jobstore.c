@@ -37,8 +37,8 @@ int main(int argc, char **argv)
     double *t[6];
     long *runs;
     char *answer;
-    ljgap_jobstore *st = NULL;
-    ljgap_job_record rec;
+    ljgap__jobstore *st = NULL;
+    ljgap__job_record rec;
     int cancel;
     if (n < 10) n = 10;
     ids = malloc((size_t)n * sizeof *ids);
@@ -52,47 +52,47 @@ int main(int argc, char **argv)
     while (strlen(answer) < 19970)
         strcat(answer, "0.123456789012,");
     strcat(answer, "0]}");
-    if (ljgap_jobstore_open_sqlite(dir, &st, err, sizeof err) != LJGAP_JOBSTORE_OK) {
+    if (ljgap__jobstore_open_sqlite(dir, &st, err, sizeof err) != LJGAP_JOBSTORE_OK) {
         fprintf(stderr, "%s\n", err);
         return 1;
     }
     for (int i = 0; i < n; i++) {
         double t0 = ljgap__now();
-        ljgap_job_id_new(ids[i]);
-        if (ljgap_jobstore_create(st, ids[i], "simulation", "{\"n\":64}", 8, 0) != 0) return 1;
+        ljgap__job_id_new(ids[i]);
+        if (ljgap__jobstore_create(st, ids[i], "simulation", "{\"n\":64}", 8, 0) != 0) return 1;
         t[0][i] = 1e3 * (ljgap__now() - t0);
     }
     for (int i = 0; i < n; i++) {
         double t0 = ljgap__now();
-        if (ljgap_jobstore_claim(st, "bench", 30, &rec) != 0) return 1;
+        if (ljgap__jobstore_claim(st, "bench", 30, &rec) != 0) return 1;
         t[1][i] = 1e3 * (ljgap__now() - t0);
         runs[i] = rec.run;
-        ljgap_job_record_clear(&rec);
+        ljgap__job_record_clear(&rec);
         t0 = ljgap__now();
-        ljgap_jobstore_renew(st, ids[i], runs[i], 0.5, 30, &cancel);
+        ljgap__jobstore_renew(st, ids[i], runs[i], 0.5, 30, &cancel);
         t[2][i] = 1e3 * (ljgap__now() - t0);
         t0 = ljgap__now();
-        ljgap_jobstore_finish(st, ids[i], runs[i], LJGAP_JOB_DONE, answer, strlen(answer));
+        ljgap__jobstore_finish(st, ids[i], runs[i], LJGAP_JOB_DONE, answer, strlen(answer));
         t[3][i] = 1e3 * (ljgap__now() - t0);
     }
     for (int i = 0; i < n; i++) {
         double t0 = ljgap__now();
         char *json;
-        if (ljgap_jobstore_get(st, ids[i], &rec) != 0 || !(json = ljgap_job_status_json(&rec)))
+        if (ljgap__jobstore_get(st, ids[i], &rec) != 0 || !(json = ljgap__job_status_json(&rec)))
             return 1;
         t[4][i] = 1e3 * (ljgap__now() - t0);
         free(json);
-        ljgap_job_record_clear(&rec);
+        ljgap__job_record_clear(&rec);
     }
     for (int i = 0; i < n; i++) {
         char id[LJGAP_JOB_ID_LEN + 1];
         double t0;
-        ljgap_job_id_new(id);
-        ljgap_jobstore_create(st, id, "simulation", "{}", 2, 0);
+        ljgap__job_id_new(id);
+        ljgap__jobstore_create(st, id, "simulation", "{}", 2, 0);
         t0 = ljgap__now();
-        ljgap_jobstore_cancel(st, id, &rec);
+        ljgap__jobstore_cancel(st, id, &rec);
         t[5][i] = 1e3 * (ljgap__now() - t0);
-        ljgap_job_record_clear(&rec);
+        ljgap__job_record_clear(&rec);
     }
     printf("# job store: SQLite %s, WAL, FULL commits for create/cancel/finish, on a temporary "
            "directory\n",
@@ -103,7 +103,7 @@ int main(int argc, char **argv)
     report("claim", t[1], n);
     report("renew (progress, lease, cancel?)", t[2], n);
     report("finish (20 kB result)", t[3], n);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
     nftw(dir, rm1, 8, FTW_DEPTH | FTW_PHYS);
     for (int k = 0; k < 6; k++)
         free(t[k]);

@@ -58,16 +58,16 @@ typedef struct {
     char *body;
     size_t len;
     double dx;
-    ljgap_topo_spec t; /* the parsed map */
+    ljgap__topo_spec t; /* the parsed map */
     size_t answer_len;
 } timing;
 
 static int run_parse(void *ctx, int i)
 {
     timing *c = ctx;
-    ljgap_verr e = {cJSON_CreateArray(), 0, 0};
+    ljgap__verr e = {cJSON_CreateArray(), 0, 0};
     free(c->t.h);
-    ljgap_topo_text_parse(c->body, c->len, (size_t)1 << 24, &c->t, &e);
+    ljgap__topo_text_parse(c->body, c->len, (size_t)1 << 24, &c->t, &e);
     cJSON_Delete(e.errors);
     return e.n || !c->t.h;
 }
@@ -87,13 +87,13 @@ static int run_handler(void *ctx, int i)
     timing *c = ctx;
     char dx[32];
     snprintf(dx, sizeof dx, "%.17g", c->dx);
-    ljgap_param p[] = {{"dx", dx}};
-    ljgap_reply r;
-    ljgap_handle_text("psd", p, 1, c->body, c->len, NULL, &r);
+    ljgap__param p[] = {{"dx", dx}};
+    ljgap__reply r;
+    ljgap__handle_text("psd", p, 1, c->body, c->len, NULL, &r);
     c->answer_len = r.len;
     int st = r.status != 200;
     if (st) fprintf(stderr, "topo: %.300s\n", r.body);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     return st;
 }
 
@@ -103,16 +103,16 @@ static int time_stages(const char *path, double dx)
     timing c = {0};
     double ms;
     int reps;
-    ljgap_limits lim;
+    ljgap__limits lim;
     if (!f || fseek(f, 0, SEEK_END) || (long)(c.len = (size_t)ftell(f)) < 0 ||
         fseek(f, 0, SEEK_SET))
         return 1;
     if (!(c.body = malloc(c.len)) || fread(c.body, 1, c.len, f) != c.len) return 1;
     fclose(f);
     c.dx = dx;
-    ljgap_limits_default(&lim);
+    ljgap__limits_default(&lim);
     lim.max_topo_points = 1L << 24;
-    ljgap_handler_set_limits(&lim);
+    ljgap__handler_set_limits(&lim);
     printf("body_bytes %zu (%.1f MiB)\n", c.len, (double)c.len / (1 << 20));
     if (bench_median_ms(run_parse, NULL, &c, &ms, &reps)) return 1;
     printf("map %zu x %zu\n", c.t.nx, c.t.ny);

@@ -23,12 +23,12 @@ static double median_ms(const char *endpoint, const char *body, int runs, int *s
 {
     double *t = malloc((size_t)runs * sizeof *t), m;
     for (int i = 0; i < runs; i++) {
-        ljgap_reply r;
+        ljgap__reply r;
         double t0 = ljgap__now();
-        ljgap_handle(endpoint, body, strlen(body), &r);
+        ljgap__handle(endpoint, body, strlen(body), &r);
         t[i] = (ljgap__now() - t0) * 1e3;
         *status = r.status;
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
     m = bench_median(t, runs);
     free(t);

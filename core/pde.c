@@ -815,7 +815,7 @@ end:
     return st;
 }
 
-int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, int level,
+int ljgap__pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, int level,
                                ljgap_summary *sum)
 {
     ljgap_opts o;
@@ -831,7 +831,7 @@ int ljgap_pde_summary_at_level(const ljgap_psd *psd, double g_lo, double g_hi, i
     return st;
 }
 
-int ljgap_pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double g_lo, double g_hi,
+int ljgap__pde_pdf_at_level(const ljgap_psd *psd, double g_ave, double k2, double g_lo, double g_hi,
                            int level, ljgap_pdf *out)
 {
     if (!(g_lo > 0 && g_lo < g_ave && g_ave < g_hi) || level < 0 || level > MAX_LEVEL)

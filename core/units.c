@@ -8,7 +8,7 @@
  * the variance m0 = 2π∫k PS dk (22) becomes m̃0 = m0/ε², so h_rms = √m0 is in units of ε.
  * Composite moduli: 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 (theory.md §6).
  *
- * The SI forms of whole results (ljgap_si_*: a summary, traction points, a PDF) are built here
+ * The SI forms of whole results (ljgap__si_*: a summary, traction points, a PDF) are built here
  * from those conversions, so an answer's SI numbers come from one place: gaps x ε, tractions
  * x σ0, energies x Δγ (Δγeff is in units of Δγ), variances x ε², wavenumbers / χ, densities
  * of the gap / ε; an error converts with its value (a density's L1 error ∫|δΦ|dg is a pure

@@ -1,4 +1,4 @@
-# fuzz.mk -- hardening (issue 8): the libFuzzer target on ljgap_handle and its corpus replay;
+# fuzz.mk -- hardening (issue 8): the libFuzzer target on ljgap__handle and its corpus replay;
 # a second target on the instrument-file readers (tests/fuzz/fuzz_files.c, issue 28).
 #   make fuzz FUZZ_SECONDS=N   build $(BUILD)/fuzz/fuzz_handler with clang
 #                              -fsanitize=fuzzer,address,undefined and fuzz for N s (default 60),

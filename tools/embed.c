@@ -1,7 +1,7 @@
 /* embed.c -- writes the page's files as a C table for ljgapd (webfiles.h).
  *
- *   embed OUT.c DIR NAME...   each DIR/NAME (an allowlisted name, ljgap_web_type) becomes one
- *                             entry of const ljgap_web_file ljgapd_web_files[], with its bytes,
+ *   embed OUT.c DIR NAME...   each DIR/NAME (an allowlisted name, ljgapd_web_type) becomes one
+ *                             entry of const ljgapd_web_file ljgapd_web_files[], with its bytes,
  *                             its Content-Type and an ETag (FNV-1a, 64 bits, of the bytes)
  *
  * A build tool, run by the Makefile; it fails (status 1, OUT removed) on any name that is not
@@ -65,17 +65,17 @@ int main(int argc, char **argv)
             "#include \"webfiles.h\"\n\n",
             argv[2]);
     for (int i = 0; i < n; i++) {
-        if (!ljgap_web_type(argv[3 + i])) {
+        if (!ljgapd_web_type(argv[3 + i])) {
             fprintf(stderr, "embed: %s is not a name the page may serve (webfiles.h)\n",
                     argv[3 + i]);
             goto end;
         }
         if (put_bytes(out, argv[2], argv[3 + i], i, &len[i], &hash[i]) != 0) goto end;
     }
-    fprintf(out, "\nconst ljgap_web_file ljgapd_web_files[] = {\n");
+    fprintf(out, "\nconst ljgapd_web_file ljgapd_web_files[] = {\n");
     for (int i = 0; i < n; i++)
         fprintf(out, "    {\"%s\", \"%s\", f%d, %zu, \"\\\"%016llx\\\"\"},\n", argv[3 + i],
-                ljgap_web_type(argv[3 + i]), i, len[i], (unsigned long long)hash[i]);
+                ljgapd_web_type(argv[3 + i]), i, len[i], (unsigned long long)hash[i]);
     fprintf(out, "};\nconst size_t ljgapd_web_nfiles = %d;\n", n);
     rc = ferror(out) ? 1 : 0;
 end:

@@ -349,7 +349,7 @@ const LJTopo = (() => {
     api.setIdle(`PSD of ${f.name}: ${psd.k.length} bins.`);
   }
 
-  /* The psd object of a /v1/psd answer for the combination (as ljgap_combine_body makes it). */
+  /* The psd object of a /v1/psd answer for the combination (as ljgap__combine_body makes it). */
   /* The psd object of a /v1/psd answer, for the combine: null when it has none (or no P_err). */
   function psdObject(a) {
     return a.psd && a.psd.kind === "table" && a.psd.P_err ? a.psd : null;

@@ -115,7 +115,7 @@ static int match(const range *r, const char *type, size_t tlen, const char *sub)
     return r->slen == strlen(sub) && strncasecmp(r->sub, sub, r->slen) == 0 ? 3 : 0;
 }
 
-int ljgap_accept_pick(const char *accept, const char *const *offered, size_t n)
+int ljgap__accept_pick(const char *accept, const char *const *offered, size_t n)
 {
     int best = -1, best_q = 0;
     size_t best_pos = 0;

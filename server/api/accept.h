@@ -19,6 +19,6 @@
 /* The index in offered[0..n) (type/subtype strings, lower case, most preferred first) of the
  * type the Accept header value prefers, or -1 when it accepts none of them. accept NULL or
  * empty: 0. */
-int ljgap_accept_pick(const char *accept, const char *const *offered, size_t n);
+int ljgap__accept_pick(const char *accept, const char *const *offered, size_t n);
 
 #endif

@@ -3,7 +3,7 @@
  * files only.
  *
  * A runner gets the job with the validated request in j->rq and builds its answer in j->ans
- * through ljgap_ans_put, ljgap_ans_num and ljgap_ans_nums (handler.c's put, put_num, put_nums:
+ * through ljgap__ans_put, ljgap__ans_num and ljgap__ans_nums (handler.c's put, put_num, put_nums:
  * no NaN or Inf goes out, an allocation failure sets j->oom); run_job adds meta. It returns a
  * core status; LJGAP_EINVAL answers a 422 outside-model problem at j->bad_ptr whose detail
  * starts with j->bad_head and carries the warnings.
@@ -33,9 +33,9 @@
 
 /* One computation: the validated request and the answer being built. */
 typedef struct {
-    ljgap_request rq;           /* what was asked; rq.warn collects every warning */
+    ljgap__request rq;           /* what was asked; rq.warn collects every warning */
     cJSON *ans;                 /* the answer object */
-    double deadline;            /* ljgap_clock_now() value when the time cap runs out */
+    double deadline;            /* ljgap__clock_now() value when the time cap runs out */
     const volatile int *cancel; /* the call's cancel flag (or the limits' one) */
     int oom;                    /* an allocation failed while building ans */
     char fail[LJGAP_MAX_WARN * LJGAP_WARN_LEN + 400]; /* extra detail for a failed status, ""
@@ -43,67 +43,67 @@ typedef struct {
     const char *bad_ptr;  /* pointer of an LJGAP_EINVAL problem (NULL: "/psd") */
     const char *bad_head; /* its detail's first words (NULL: the PSD's) */
     cJSON *ie_meta;       /* meta.input_error, how the input's uncertainty was carried (owned
-                           * until ljgap_ans_meta places it; server/uncert/input_error.c) */
+                           * until ljgap__ans_meta places it; server/uncert/input_error.c) */
 } job;
 
 /* item into parent (member key, or array element when key is NULL); NULL (j->oom) on failure */
-cJSON *ljgap_ans_put(job *j, cJSON *parent, const char *key, cJSON *item);
+cJSON *ljgap__ans_put(job *j, cJSON *parent, const char *key, cJSON *item);
 /* the number v, or null with a warning naming label ([idx] when idx >= 0) when not finite */
-void ljgap_ans_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx);
-/* n numbers x[0], x[stride bytes], ... each through ljgap_ans_num */
-cJSON *ljgap_ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
+void ljgap__ans_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx);
+/* n numbers x[0], x[stride bytes], ... each through ljgap__ans_num */
+cJSON *ljgap__ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
                       size_t stride, const char *label);
 
 /* The psd object of a table k, P, P_err (n knots) with the tail P ∝ k^q when q is finite
  * (exponent_err q_err) as j->ans's "psd"; its variance with the tail into *m0 (NAN: none). */
-void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
+void ljgap__ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
                          double q, double q_err, double *m0);
 /* With a material (j->rq.has_material): the answer's "domain" of the band [kf, kl] (named band
- * in its warning), k1 in d->k1; write the psd object from d->k1, then ljgap_ans_domain_end with
+ * in its warning), k1 in d->k1; write the psd object from d->k1, then ljgap__ans_domain_end with
  * its variance (NAN: none) adds h_rms and m0_dimensionless. */
 typedef struct {
     cJSON *obj;
     const char *band;
     double kd, kf, kl, k1, inside;
-} ljgap_domain;
-void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap_domain *d);
-void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0);
+} ljgap__domain;
+void ljgap__ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap__domain *d);
+void ljgap__ans_domain_end(job *j, const ljgap__domain *d, double m0);
 /* With a material: the answer's "si" scales (chi_m, sigma0_Pa, E_star_Pa) */
-void ljgap_ans_si(job *j);
+void ljgap__ans_si(job *j);
 /* ---- the handler's replies and checks, for simreq.c ---- */
-/* The limits set at start-up (handler.h: ljgap_handler_set_limits). */
-const ljgap_limits *ljgap_handler_limits(void);
+/* The limits set at start-up (handler.h: ljgap__handler_set_limits). */
+const ljgap__limits *ljgap__handler_limits(void);
 /* 500 out-of-memory, from a body that needs no allocation. */
-void ljgap_ans_oom(ljgap_reply *out);
+void ljgap__ans_oom(ljgap__reply *out);
 /* doc as the answer, with status and ctype. */
-void ljgap_ans_reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc);
+void ljgap__ans_reply_json(ljgap__reply *out, int status, const char *ctype, const cJSON *doc);
 /* A problem of type slug with detail; errors (taken; NULL: empty) is its errors[]. */
-void ljgap_ans_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors);
+void ljgap__ans_problem(ljgap__reply *out, const char *slug, const char *detail, cJSON *errors);
 /* The problem answering a failed core status st of job j. */
-void ljgap_ans_status(ljgap_reply *out, int st, const job *j);
+void ljgap__ans_status(ljgap__reply *out, int st, const job *j);
 /* Parses and validates body for ep into j->rq: 1, or 0 with *out the problem. */
-int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out);
+int ljgap__ans_validate(ljgap__endpoint ep, const char *body, size_t len, job *j, ljgap__reply *out);
 /* The answer forms, JSON then CSV (accept.h picks among them). */
-extern const char *const ljgap_ans_forms[2];
+extern const char *const ljgap__ans_forms[2];
 /* The form (0 JSON, 1 CSV when csv) accept prefers, or -1 with *out the 406 problem. */
-int ljgap_ans_negotiate(const char *accept, int csv, ljgap_reply *out);
+int ljgap__ans_negotiate(const char *accept, int csv, ljgap__reply *out);
 /* The answer's meta (method, elapsed_ms since t0, version, warnings, cached). */
-void ljgap_ans_meta(job *j, double t0);
+void ljgap__ans_meta(job *j, double t0);
 /* The summary s into obj, its errors into err_parent's member err_key. */
-void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+void ljgap__ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
                        const ljgap_summary *s);
 /* prefix, then the warnings of w, into buf. */
 
 /* The 422 validation problem of ve's errors (taken) into *out. */
-void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve);
+void ljgap__ans_invalid(ljgap__reply *out, ljgap__verr *ve);
 /* Runs a validated request j with run and answers it in form (0 JSON, 1 endpoint's CSV) into
  * *out, meta timed from t0 (j->rq stays the caller's to free). */
-void ljgap_ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
-                       const ljgap_call *call, double t0, ljgap_reply *out);
+void ljgap__ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+                       const ljgap__call *call, double t0, ljgap__reply *out);
 
 /* psd.c: the runner of psd */
-int ljgap_run_psd(job *j);
+int ljgap__run_psd(job *j);
 /* combine.c: the runner of psd/combine */
-int ljgap_run_combine(job *j);
+int ljgap__run_combine(job *j);
 
 #endif

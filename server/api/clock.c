@@ -3,7 +3,7 @@
 
 #include <math.h>
 
-struct timespec ljgap_deadline_in(double s)
+struct timespec ljgap__deadline_in(double s)
 {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
@@ -18,7 +18,7 @@ struct timespec ljgap_deadline_in(double s)
     return t;
 }
 
-int ljgap_cond_init_monotonic(pthread_cond_t *c)
+int ljgap__cond_init_monotonic(pthread_cond_t *c)
 {
     pthread_condattr_t ca;
     int e = pthread_condattr_init(&ca);
@@ -29,14 +29,14 @@ int ljgap_cond_init_monotonic(pthread_cond_t *c)
     return e;
 }
 
-double ljgap_clock_now(void)
+double ljgap__clock_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-double ljgap_clock_since(const struct timespec *t0)
+double ljgap__clock_since(const struct timespec *t0)
 {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);

@@ -12,15 +12,15 @@
 #include <time.h>
 
 /* Seconds on CLOCK_MONOTONIC: timings and deadlines of the server (the core keeps its own). */
-double ljgap_clock_now(void);
+double ljgap__clock_now(void);
 /* Seconds since t0 (a CLOCK_MONOTONIC reading). */
-double ljgap_clock_since(const struct timespec *t0);
+double ljgap__clock_since(const struct timespec *t0);
 
 /* The absolute CLOCK_MONOTONIC time s seconds from now (s <= 0 or NaN: now; at most 1e6 s). */
-struct timespec ljgap_deadline_in(double s);
+struct timespec ljgap__deadline_in(double s);
 
 /* Initialises c as a condition variable whose timed waits use CLOCK_MONOTONIC (0, or the
  * pthread error). */
-int ljgap_cond_init_monotonic(pthread_cond_t *c);
+int ljgap__cond_init_monotonic(pthread_cond_t *c);
 
 #endif

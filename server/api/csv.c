@@ -8,7 +8,7 @@
  * read from the answer.
  */
 #include "csv.h"
-#include "problems.h" /* ljgap_reply_problem */
+#include "problems.h" /* ljgap__reply_problem */
 
 #include <math.h>
 #include <stdio.h>
@@ -65,53 +65,53 @@ static const char *unit_of(const char *name)
 }
 
 /* The fewest digits (15..17) that read back as v. */
-static void put_number(ljgap_textbuf *b, double v)
+static void put_number(ljgap__textbuf *b, double v)
 {
     char s[40];
     for (int prec = 15; prec <= 17; prec++) {
         snprintf(s, sizeof s, "%.*g", prec, v);
         if (strtod(s, NULL) == v) break;
     }
-    ljgap_textbuf_printf(b, "%s", s);
+    ljgap__textbuf_printf(b, "%s", s);
 }
 
 /* A cell (or a comment's value): number, empty for null ("inf" for an infinite cut-off), true
  * or false, or a string with control characters blanked so it stays on its line. */
-static void put_value(ljgap_textbuf *b, const cJSON *v, const char *name, int cell)
+static void put_value(ljgap__textbuf *b, const cJSON *v, const char *name, int cell)
 {
     if (cJSON_IsNumber(v)) {
         put_number(b, v->valuedouble);
     } else if (cJSON_IsBool(v)) {
-        ljgap_textbuf_printf(b, "%s", cJSON_IsTrue(v) ? "true" : "false");
+        ljgap__textbuf_printf(b, "%s", cJSON_IsTrue(v) ? "true" : "false");
     } else if (cJSON_IsString(v)) {
         for (const char *c = v->valuestring; *c; c++)
-            ljgap_textbuf_put(b, (unsigned char)*c < 0x20 || *c == 0x7f ? " " : c, 1);
+            ljgap__textbuf_put(b, (unsigned char)*c < 0x20 || *c == 0x7f ? " " : c, 1);
     } else if (cJSON_IsNull(v) && name && (!strcmp(name, "k2") || !strcmp(name, "k2_per_m"))) {
-        ljgap_textbuf_printf(b, "inf"); /* null = an infinite cut-off, by contract */
+        ljgap__textbuf_printf(b, "inf"); /* null = an infinite cut-off, by contract */
     } else if (!cell) {
-        ljgap_textbuf_printf(b, "null");
+        ljgap__textbuf_printf(b, "null");
     }
 }
 
 /* "# path [unit] = value ± err" */
-static void comment(ljgap_textbuf *b, const char *path, const char *name, const cJSON *v,
+static void comment(ljgap__textbuf *b, const char *path, const char *name, const cJSON *v,
                     const cJSON *err)
 {
     /* the model's relative differences (validity.c) are pure numbers, whatever their name */
     const char *u = strstr(path, "model.vs_discrete") ? NULL : unit_of(name);
-    ljgap_textbuf_printf(b, "# %s", path);
-    if (u && (cJSON_IsNumber(v) || cJSON_IsNull(v))) ljgap_textbuf_printf(b, " [%s]", u);
-    ljgap_textbuf_printf(b, " = ");
+    ljgap__textbuf_printf(b, "# %s", path);
+    if (u && (cJSON_IsNumber(v) || cJSON_IsNull(v))) ljgap__textbuf_printf(b, " [%s]", u);
+    ljgap__textbuf_printf(b, " = ");
     put_value(b, v, name, 0);
     if (cJSON_IsNumber(err)) {
-        ljgap_textbuf_printf(b, " ± ");
+        ljgap__textbuf_printf(b, " ± ");
         put_number(b, err->valuedouble);
     }
-    ljgap_textbuf_printf(b, "\n");
+    ljgap__textbuf_printf(b, "\n");
 }
 
 /* One comment line per element of the array a: path[i] = value. */
-static void comment_list(ljgap_textbuf *b, const char *path, const char *name, const cJSON *a)
+static void comment_list(ljgap__textbuf *b, const char *path, const char *name, const cJSON *a)
 {
     char p[200];
     int i = 0;
@@ -124,7 +124,7 @@ static void comment_list(ljgap_textbuf *b, const char *path, const char *name, c
 /* Comment lines for the scalar members of obj under prefix, each with the number of the same
  * name in err as its error; objects are walked into (err with them), arrays of strings are
  * listed, other arrays (the columns) and "error" itself are left out. */
-static void comments(ljgap_textbuf *b, const char *prefix, const cJSON *obj, const cJSON *err)
+static void comments(ljgap__textbuf *b, const char *prefix, const cJSON *obj, const cJSON *err)
 {
     char p[160];
     for (const cJSON *c = obj ? obj->child : NULL; c; c = c->next) {
@@ -151,34 +151,34 @@ typedef struct {
 
 #define MAX_COLS 32
 
-static void put_header(ljgap_textbuf *b, const column *c, int n)
+static void put_header(ljgap__textbuf *b, const column *c, int n)
 {
     for (int i = 0; i < n; i++) {
-        ljgap_textbuf_printf(b, "%s%s", i ? "," : "", c[i].name);
-        if (c[i].unit) ljgap_textbuf_printf(b, " [%s]", c[i].unit);
+        ljgap__textbuf_printf(b, "%s%s", i ? "," : "", c[i].name);
+        if (c[i].unit) ljgap__textbuf_printf(b, " [%s]", c[i].unit);
     }
-    ljgap_textbuf_printf(b, "\n");
+    ljgap__textbuf_printf(b, "\n");
 }
 
 /* Rows 0 .. (length of the first column) - 1; prefix, when not NULL, is written first in
  * every row (the pdf's index and cut-off). */
-static void put_rows(ljgap_textbuf *b, const char *prefix, const column *c, int n)
+static void put_rows(ljgap__textbuf *b, const char *prefix, const column *c, int n)
 {
     int rows = cJSON_GetArraySize(c[0].array);
     const cJSON *cur[MAX_COLS];
     for (int k = 0; k < n; k++)
         cur[k] = c[k].array ? c[k].array->child : NULL;
     for (int i = 0; i < rows && !b->oom; i++) {
-        if (prefix) ljgap_textbuf_printf(b, "%s", prefix);
+        if (prefix) ljgap__textbuf_printf(b, "%s", prefix);
         for (int k = 0; k < n; k++) {
-            if (k) ljgap_textbuf_printf(b, ",");
+            if (k) ljgap__textbuf_printf(b, ",");
             if (c[k].factor != 0 && cJSON_IsNumber(cur[k]))
                 put_number(b, cur[k]->valuedouble * c[k].factor);
             else
                 put_value(b, cur[k], c[k].name, 1);
             if (cur[k]) cur[k] = cur[k]->next;
         }
-        ljgap_textbuf_printf(b, "\n");
+        ljgap__textbuf_printf(b, "\n");
     }
 }
 
@@ -195,12 +195,12 @@ static void add(column *c, int *n, const char *name, const char *unit, const cJS
     (*n)++;
 }
 
-static void csv_traction(ljgap_textbuf *b, const cJSON *ans)
+static void csv_traction(ljgap__textbuf *b, const cJSON *ans)
 {
     const cJSON *si = get(ans, "si"), *err = get(ans, "error");
     column c[MAX_COLS];
     int n = 0;
-    ljgap_textbuf_printf(b, "# ljgap traction: the mean traction sigma against the mean gap "
+    ljgap__textbuf_printf(b, "# ljgap traction: the mean traction sigma against the mean gap "
                             "g_ave, one row per gap\n");
     comments(b, "", ans, err);
     add(c, &n, "g_ave", NULL, get(ans, "g_ave"), 0);
@@ -219,7 +219,7 @@ static void csv_traction(ljgap_textbuf *b, const cJSON *ans)
     put_rows(b, NULL, c, n);
 }
 
-static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
+static void csv_pdf(ljgap__textbuf *b, const cJSON *ans)
 {
     const cJSON *pdfs = get(ans, "pdfs"), *si = get(ans, "si");
     const cJSON *epdfs = get(get(ans, "error"), "pdfs"), *sipdfs = get(si, "pdfs");
@@ -228,7 +228,7 @@ static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
     int np = cJSON_GetArraySize(pdfs);
     column c[MAX_COLS];
     int n = 0;
-    ljgap_textbuf_printf(b, "# ljgap pdf: the gap PDF phi(g) for each cut-off k2, one row per "
+    ljgap__textbuf_printf(b, "# ljgap pdf: the gap PDF phi(g) for each cut-off k2, one row per "
                             "point; pdf is the index in pdfs[]\n");
     comments(b, "", ans, get(ans, "error"));
     for (int i = 0; i < np; i++) { /* phi_l1 has no value beside it: a line of its own */
@@ -251,11 +251,11 @@ static void csv_pdf(ljgap_textbuf *b, const cJSON *ans)
             comment(b, p, "sigma_Pa", get(se, "sigma_Pa"), NULL);
         }
     }
-    ljgap_textbuf_printf(b, "pdf,k2 [1/chi],g [eps],phi [1/eps]%s\n",
+    ljgap__textbuf_printf(b, "pdf,k2 [1/chi],g [eps],phi [1/eps]%s\n",
                          si ? ",g_m [m],phi_per_m [1/m]" : "");
     for (int i = 0; i < np && !b->oom; i++) {
         const cJSON *pd = cJSON_GetArrayItem(pdfs, i), *sp = cJSON_GetArrayItem(sipdfs, i);
-        ljgap_textbuf t = {0};
+        ljgap__textbuf t = {0};
         n = 0;
         add(c, &n, "g", NULL, get(pd, "g"), 0);
         add(c, &n, "phi", NULL, get(pd, "phi"), 0);
@@ -281,7 +281,7 @@ static const char *vary_unit(const char *vary, int si_psd)
     return "1"; /* D */
 }
 
-static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
+static void csv_sweep(ljgap__textbuf *b, const cJSON *ans, int si_psd)
 {
     /* the columns after values: each result's field, its error's column, from si.results? */
     static const struct {
@@ -308,7 +308,7 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
     char ie_names[16][40]; /* NAME_input_err of the fields with an error */
     for (const cJSON *r = res ? res->child : NULL; r; r = r->next)
         ie |= get(r, "input_error") != NULL; /* the measurement's uncertainty: its columns */
-    ljgap_textbuf_printf(b, "# ljgap sweep: the adhesion quantities for each value of the "
+    ljgap__textbuf_printf(b, "# ljgap sweep: the adhesion quantities for each value of the "
                             "varied PSD field, one row per value\n");
     comments(b, "", ans, NULL);
     for (int k = 0; k < 2; k++) { /* each result's model (validity.c), and its copy in si */
@@ -363,12 +363,12 @@ static void csv_sweep(ljgap_textbuf *b, const cJSON *ans, int si_psd)
     cJSON_Delete(cols);
 }
 
-static void csv_simulation(ljgap_textbuf *b, const cJSON *ans)
+static void csv_simulation(ljgap__textbuf *b, const cJSON *ans)
 {
     const cJSON *err = get(ans, "error");
     column c[MAX_COLS];
     int n = 0;
-    ljgap_textbuf_printf(b, "# ljgap simulations: the discrete numerical model's mean traction "
+    ljgap__textbuf_printf(b, "# ljgap simulations: the discrete numerical model's mean traction "
                             "against the mean gap, one row per gap\n");
     comments(b, "", ans, err);
     comment_list(b, "m0_realized", "m0_realized", get(ans, "m0_realized"));
@@ -383,7 +383,7 @@ static void csv_simulation(ljgap_textbuf *b, const cJSON *ans)
     put_rows(b, NULL, c, n);
 }
 
-int ljgap_csv_offers(const char *endpoint)
+int ljgap__csv_offers(const char *endpoint)
 {
     static const char *const with_csv[] = {"traction", "pdf", "sweep", "simulations"};
     for (size_t i = 0; endpoint && i < sizeof with_csv / sizeof with_csv[0]; i++)
@@ -391,11 +391,11 @@ int ljgap_csv_offers(const char *endpoint)
     return 0;
 }
 
-int ljgap_csv_render(const char *endpoint, const cJSON *ans, int si_psd, ljgap_reply *out)
+int ljgap__csv_render(const char *endpoint, const cJSON *ans, int si_psd, ljgap__reply *out)
 {
-    ljgap_textbuf b = {0};
+    ljgap__textbuf b = {0};
     memset(out, 0, sizeof *out);
-    if (!ljgap_csv_offers(endpoint) || !cJSON_IsObject(ans)) return -1;
+    if (!ljgap__csv_offers(endpoint) || !cJSON_IsObject(ans)) return -1;
     if (!strcmp(endpoint, "traction"))
         csv_traction(&b, ans);
     else if (!strcmp(endpoint, "pdf"))
@@ -415,21 +415,21 @@ int ljgap_csv_render(const char *endpoint, const cJSON *ans, int si_psd, ljgap_r
     return 0;
 }
 
-int ljgap_csv_reply(const char *endpoint, ljgap_reply *r)
+int ljgap__csv_reply(const char *endpoint, ljgap__reply *r)
 {
     cJSON *doc;
-    ljgap_reply csv;
+    ljgap__reply csv;
     if (r->status < 200 || r->status > 299 || strcmp(r->content_type, "application/json") != 0)
         return 0;
     doc = cJSON_ParseWithLength(r->body, r->len);
-    if (!doc || ljgap_csv_render(endpoint, doc, 0, &csv) != 0) {
+    if (!doc || ljgap__csv_render(endpoint, doc, 0, &csv) != 0) {
         cJSON_Delete(doc);
-        ljgap_reply_free(r);
-        ljgap_reply_problem(r, "out-of-memory", "the server ran out of memory");
+        ljgap__reply_free(r);
+        ljgap__reply_problem(r, "out-of-memory", "the server ran out of memory");
         return -1;
     }
     cJSON_Delete(doc);
-    ljgap_reply_free(r);
+    ljgap__reply_free(r);
     *r = csv;
     return 0;
 }

@@ -27,17 +27,17 @@
 #define LJGAP_CT_CSV "text/csv; charset=utf-8; header=present"
 
 /* Does endpoint ("traction", "pdf", "sweep", "simulations") have a CSV form? */
-int ljgap_csv_offers(const char *endpoint);
+int ljgap__csv_offers(const char *endpoint);
 
 /* Writes the CSV form of ans, the JSON object of a 2xx answer of endpoint, into *out (status
  * 200, LJGAP_CT_CSV). si_psd: the request gave its psd in SI units (the unit of a sweep's
  * values). Returns 0, or -1 when memory runs out or the endpoint has no CSV form (*out is
  * then empty). */
-int ljgap_csv_render(const char *endpoint, const cJSON *ans, int si_psd, ljgap_reply *out);
+int ljgap__csv_render(const char *endpoint, const cJSON *ans, int si_psd, ljgap__reply *out);
 
 /* Turns *r, a 2xx JSON reply of endpoint, into its CSV form in place (r is left as it was
  * when it is not a 2xx JSON reply); -1 when memory runs out (r then holds the out-of-memory
  * problem). The command line's --csv for simulations, whose answer is built as JSON. */
-int ljgap_csv_reply(const char *endpoint, ljgap_reply *r);
+int ljgap__csv_reply(const char *endpoint, ljgap__reply *r);
 
 #endif

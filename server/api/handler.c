@@ -1,6 +1,6 @@
 /* handler.c -- the request handler: endpoint name + JSON body + Accept -> status + body.
  *
- * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap_handle_call. It parses the
+ * The CLI, the HTTP daemon and the fuzzer are thin shells over ljgap__handle_call. It parses the
  * body with cJSON, validates it (request.c: every bad field reported with a JSON pointer),
  * builds the PSD, calls the core (include/ljgap.h) and serialises the answer exactly as
  * docs/api.md fixes it: as JSON, or for traction, pdf and sweep as CSV when the Accept header
@@ -22,7 +22,7 @@
  * is the sequential one.
  *
  * Endpoints whose runner lives in its own file reach the builders here through answer.h: psd
- * (psd.c), psd/combine (combine.c); simulations, which are not an endpoint of ljgap_handle (a run
+ * (psd.c), psd/combine (combine.c); simulations, which are not an endpoint of ljgap__handle (a run
  * takes minutes), are parsed, run and answered in simreq.c.
  *
  * Problem types: the "type" member of every application/problem+json answer is /problems/SLUG,
@@ -42,16 +42,16 @@
  * Every problem has "type", "title", "status", "detail" and "errors" (possibly empty).
  */
 #include "handler.h"
-#include "clock.h" /* ljgap_clock_now */
+#include "clock.h" /* ljgap__clock_now */
 #include "accept.h"
 #include "answer.h"
 #include "csv.h"
-#include "input_error.h" /* the measurement's uncertainty: ljgap_ie_* */
+#include "input_error.h" /* the measurement's uncertainty: ljgap__ie_* */
 #include "ljgap_sim.h"
 #include "ljgap_topo.h"
 #include "problems.h"
 #include "request.h"
-#include "textbuf.h"   /* ljgap_utf8_span */
+#include "textbuf.h"   /* ljgap__utf8_span */
 #include "topo_text.h" /* the text upload of psd */
 #include "validity/validity.h" /* the answers' "model" */
 
@@ -63,21 +63,21 @@
 #include <string.h>
 #include <unistd.h>
 
-/* Sent when not even a problem can be allocated; never freed (see ljgap_reply_free). */
+/* Sent when not even a problem can be allocated; never freed (see ljgap__reply_free). */
 static char oom_body[] = "{\"type\":\"" LJGAP_PROBLEM_BASE "out-of-memory\","
                          "\"title\":\"Out of memory\",\"status\":500,"
                          "\"detail\":\"the server ran out of memory\",\"errors\":[]}";
 
-static ljgap_limits limits = LJGAP_LIMITS_INIT; /* written only by ljgap_handler_set_limits */
+static ljgap__limits limits = LJGAP_LIMITS_INIT; /* written only by ljgap__handler_set_limits */
 
-void ljgap_handler_set_limits(const ljgap_limits *l)
+void ljgap__handler_set_limits(const ljgap__limits *l)
 {
     limits = *l;
 }
 
 /* ---- replies ---- */
 
-void ljgap_ans_oom(ljgap_reply *out)
+void ljgap__ans_oom(ljgap__reply *out)
 {
     out->status = 500;
     out->body = oom_body;
@@ -86,11 +86,11 @@ void ljgap_ans_oom(ljgap_reply *out)
 }
 
 /* Serialises doc into out; doc stays the caller's. */
-void ljgap_ans_reply_json(ljgap_reply *out, int status, const char *ctype, const cJSON *doc)
+void ljgap__ans_reply_json(ljgap__reply *out, int status, const char *ctype, const cJSON *doc)
 {
     char *s = cJSON_PrintUnformatted(doc);
     if (!s) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
     out->status = status;
@@ -101,9 +101,9 @@ void ljgap_ans_reply_json(ljgap_reply *out, int status, const char *ctype, const
 
 /* A problem answer of type /problems/slug (status and title from problems.c); takes errors
  * (an array, or NULL for an empty one). */
-void ljgap_ans_problem(ljgap_reply *out, const char *slug, const char *detail, cJSON *errors)
+void ljgap__ans_problem(ljgap__reply *out, const char *slug, const char *detail, cJSON *errors)
 {
-    const ljgap_problem_doc *k = ljgap_problem_find(slug);
+    const ljgap__problem_doc *k = ljgap__problem_find(slug);
     cJSON *p = cJSON_CreateObject();
     char type[80];
     snprintf(type, sizeof type, LJGAP_PROBLEM_BASE "%s", slug);
@@ -114,21 +114,21 @@ void ljgap_ans_problem(ljgap_reply *out, const char *slug, const char *detail, c
         !cJSON_AddStringToObject(p, "detail", detail) ||
         !cJSON_AddItemToObject(p, "errors", errors)) {
         cJSON_Delete(errors);
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         goto end;
     }
-    ljgap_ans_reply_json(out, k->status, CT_PROBLEM, p);
+    ljgap__ans_reply_json(out, k->status, CT_PROBLEM, p);
 end:
     cJSON_Delete(p);
 }
 
-void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail)
+void ljgap__reply_problem(ljgap__reply *out, const char *slug, const char *detail)
 {
     memset(out, 0, sizeof *out);
-    ljgap_ans_problem(out, slug, detail, NULL);
+    ljgap__ans_problem(out, slug, detail, NULL);
 }
 
-void ljgap_reply_free(ljgap_reply *r)
+void ljgap__reply_free(ljgap__reply *r)
 {
     if (!r) return;
     if (r->body != oom_body) free(r->body);
@@ -205,7 +205,7 @@ static const ljgap_est *si_est_of(const ljgap_si_summary *s, size_t i)
 
 /* The adhesion fields of s into obj and their errors into a new object obj.error_key (all
  * null when s is NULL: the reason is already a warning). */
-void ljgap_ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
+void ljgap__ans_summary(job *j, cJSON *obj, cJSON *err_parent, const char *err_key,
                        const ljgap_summary *s)
 {
     cJSON *err = cJSON_CreateObject();
@@ -264,12 +264,12 @@ static cJSON *put_si(job *j, cJSON *parent, const ljgap_summary *s)
     return si;
 }
 
-void ljgap_ans_meta(job *j, double t0)
+void ljgap__ans_meta(job *j, double t0)
 {
     cJSON *meta = put(j, j->ans, "meta", cJSON_CreateObject());
     cJSON *w;
     put(j, meta, "method", cJSON_CreateString(j->rq.method));
-    put(j, meta, "elapsed_ms", cJSON_CreateNumber((ljgap_clock_now() - t0) * 1e3));
+    put(j, meta, "elapsed_ms", cJSON_CreateNumber((ljgap__clock_now() - t0) * 1e3));
     put(j, meta, "version", cJSON_CreateString(LJGAP_VERSION));
     w = put(j, meta, "warnings", cJSON_CreateArray());
     for (int i = 0; w && i < j->rq.warn.n; i++)
@@ -282,7 +282,7 @@ void ljgap_ans_meta(job *j, double t0)
 static int opts_now(job *j, ljgap_opts *o)
 {
     *o = j->rq.opts;
-    o->max_seconds = j->deadline - ljgap_clock_now();
+    o->max_seconds = j->deadline - ljgap__clock_now();
     o->cancel = j->cancel;
     if (o->max_seconds > 0) return LJGAP_OK;
     snprintf(j->fail, sizeof j->fail, " (the request's time budget ran out before this step)");
@@ -292,12 +292,12 @@ static int opts_now(job *j, ljgap_opts *o)
 /* ---- endpoints ---- */
 
 /* Core options and the PSD for one core call (free psd after, on success). */
-static int prepare(job *j, const ljgap_psd_spec *spec, ljgap_psd *psd, ljgap_opts *o,
+static int prepare(job *j, const ljgap__psd_spec *spec, ljgap_psd *psd, ljgap_opts *o,
                    ljgap_warnings *w)
 {
     int st = opts_now(j, o);
     if (st) return st;
-    st = ljgap_psd_from_spec(psd, spec);
+    st = ljgap__psd_from_spec(psd, spec);
     if (st == LJGAP_EINVAL)
         ljgap_warn(w, "the PSD could not be formed: its variance is not a finite positive "
                       "number");
@@ -305,7 +305,7 @@ static int prepare(job *j, const ljgap_psd_spec *spec, ljgap_psd *psd, ljgap_opt
 }
 
 /* Summary of the PSD in spec: one ljgap_traction call with no points. */
-static int summarise(job *j, const ljgap_psd_spec *spec, ljgap_summary *sum, ljgap_warnings *w)
+static int summarise(job *j, const ljgap__psd_spec *spec, ljgap_summary *sum, ljgap_warnings *w)
 {
     ljgap_psd psd;
     ljgap_opts o;
@@ -321,16 +321,16 @@ static int run_adhesion(job *j)
     ljgap_summary sum;
     int st = summarise(j, &j->rq.psd, &sum, &j->rq.warn);
     if (st) return st;
-    ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
+    ljgap__ans_summary(j, j->ans, j->ans, "error", &sum);
     put_si(j, j->ans, &sum);
-    ljgap_ie_adhesion(j, &sum);
-    ljgap_ans_model(j, &j->rq.psd);
+    ljgap__ie_adhesion(j, &sum);
+    ljgap__ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 
 static int run_traction(job *j)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     ljgap_summary sum;
     ljgap_est *sigma = malloc(rq->nx * sizeof *sigma);
     ljgap_psd psd;
@@ -346,7 +346,7 @@ static int run_traction(job *j)
     sum_obj = put(j, j->ans, "summary", cJSON_CreateObject());
     err = put(j, j->ans, "error", cJSON_CreateObject());
     put_nums(j, err, "sigma", &sigma[0].err, rq->nx, sizeof *sigma, "error.sigma");
-    ljgap_ans_summary(j, sum_obj, err, "summary", &sum);
+    ljgap__ans_summary(j, sum_obj, err, "summary", &sum);
     if ((si = put_si(j, j->ans, NULL))) {
         ljgap_si_point *pt = malloc(rq->nx * sizeof *pt);
         if (!pt) {
@@ -362,8 +362,8 @@ static int run_traction(job *j)
         put_si_summary(j, sum_obj, err, "summary", &sum);
         free(pt);
     }
-    ljgap_ie_traction(j, &sum);
-    ljgap_ans_model(j, &rq->psd);
+    ljgap__ie_traction(j, &sum);
+    ljgap__ans_model(j, &rq->psd);
 end:
     free(sigma);
     return st;
@@ -371,7 +371,7 @@ end:
 
 static int run_pdf(job *j)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     ljgap_pdf *p = calloc(rq->nx, sizeof *p);
     ljgap_psd psd;
     ljgap_opts o;
@@ -426,8 +426,8 @@ static int run_pdf(job *j)
         put_num(j, e, "phi_l1", p[i].phi_err, "error.pdfs.phi_l1", (long)i);
         put_num(j, e, "sigma", p[i].sigma.err, "error.pdfs.sigma", (long)i);
     }
-    ljgap_ie_pdf(j);
-    ljgap_ans_model(j, &rq->psd);
+    ljgap__ie_pdf(j);
+    ljgap__ans_model(j, &rq->psd);
 end:
     if (p) ljgap_pdf_release(p, rq->nx);
     free(p);
@@ -450,15 +450,15 @@ static void *sweep_worker(void *arg)
 {
     sweep_work *sw = arg;
     job local = *sw->j; /* summarise may write local.fail; the request itself is only read */
-    const ljgap_request *rq = &sw->j->rq;
+    const ljgap__request *rq = &sw->j->rq;
     for (;;) {
-        ljgap_psd_spec spec;
+        ljgap__psd_spec spec;
         size_t i;
         pthread_mutex_lock(&sw->lock);
         i = sw->stop ? rq->nx : sw->next++;
         pthread_mutex_unlock(&sw->lock);
         if (i >= rq->nx) return NULL;
-        ljgap_request_sweep_spec(rq, i, &spec);
+        ljgap__request_sweep_spec(rq, i, &spec);
         sw->st[i] = summarise(&local, &spec, &sw->sum[i], &sw->w[i]);
         if (sw->st[i] && sw->st[i] != LJGAP_EFAIL) {
             pthread_mutex_lock(&sw->lock);
@@ -490,7 +490,7 @@ static void sweep_compute(sweep_work *sw)
  * reported). */
 static int run_sweep(job *j)
 {
-    ljgap_request *rq = &j->rq;
+    ljgap__request *rq = &j->rq;
     sweep_work sw = {.j = j};
     cJSON *results, *si, *sir = NULL;
     size_t failed = 0;
@@ -522,19 +522,19 @@ static int run_sweep(job *j)
     for (size_t i = 0; results && i < rq->nx; i++) {
         cJSON *r = put(j, results, NULL, cJSON_CreateObject());
         if (sw.st[i]) failed++;
-        ljgap_ans_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
+        ljgap__ans_summary(j, r, r, "error", sw.st[i] ? NULL : &sw.sum[i]);
         if (sir && !sw.st[i]) {
             cJSON *sr = put(j, sir, NULL, cJSON_CreateObject());
             put_si_summary(j, sr, sr, "error", &sw.sum[i]);
         } else if (sir)
             put(j, sir, NULL, cJSON_CreateNull());
     }
-    ljgap_ans_model_sweep(j);
+    ljgap__ans_model_sweep(j);
     if (failed == rq->nx) {
         snprintf(j->fail, sizeof j->fail, " for any of the %zu values", rq->nx);
         st = LJGAP_EFAIL;
     }
-    ljgap_ie_sweep(j, sw.sum, sw.st); /* the values computed; nothing when the sweep failed */
+    ljgap__ie_sweep(j, sw.sum, sw.st); /* the values computed; nothing when the sweep failed */
 end:
     free(sw.sum);
     free(sw.w);
@@ -556,7 +556,7 @@ static int run_contact(job *j)
                  " (the contact model needs a positive sigma_max and dgamma_eff)");
         return st == LJGAP_EINVAL ? LJGAP_EFAIL : st;
     }
-    ljgap_ans_summary(j, j->ans, j->ans, "error", &sum);
+    ljgap__ans_summary(j, j->ans, j->ans, "error", &sum);
     err = cJSON_GetObjectItemCaseSensitive(j->ans, "error");
     po = put(j, j->ans, "pull_off_N", cJSON_CreateObject());
     epo = put(j, err, "pull_off_N", cJSON_CreateObject());
@@ -578,14 +578,14 @@ static int run_contact(job *j)
     put(j, j->ans, "regime", cJSON_CreateString(ljgap_regime_name(c.regime)));
     put_num(j, j->ans, "R", j->rq.R, "R", -1);
     put_si(j, j->ans, &sum);
-    ljgap_ie_contact(j, &sum);
-    ljgap_ans_model(j, &j->rq.psd);
+    ljgap__ie_contact(j, &sum);
+    ljgap__ans_model(j, &j->rq.psd);
     return LJGAP_OK;
 }
 
 /* ---- for psd.c and combine.c ---- */
 
-void ljgap_ans_si(job *j)
+void ljgap__ans_si(job *j)
 {
     put_si(j, j->ans, NULL);
 }
@@ -595,7 +595,7 @@ void ljgap_ans_si(job *j)
 
 typedef struct {
     const char *name;   /* the endpoint's name, POST /v1/NAME */
-    ljgap_endpoint ep;  /* what request.c validates it as */
+    ljgap__endpoint ep;  /* what request.c validates it as */
     int (*run)(job *j); /* builds the answer in j->ans */
 } endpoint_row;
 
@@ -605,8 +605,8 @@ static const endpoint_row endpoints[] = {
     {"pdf", LJGAP_EP_PDF, run_pdf},
     {"sweep", LJGAP_EP_SWEEP, run_sweep},
     {"contact", LJGAP_EP_CONTACT, run_contact},
-    {"psd", LJGAP_EP_PSD, ljgap_run_psd},
-    {"psd/combine", LJGAP_EP_COMBINE, ljgap_run_combine},
+    {"psd", LJGAP_EP_PSD, ljgap__run_psd},
+    {"psd/combine", LJGAP_EP_COMBINE, ljgap__run_combine},
 };
 
 static const endpoint_row *endpoint_find(const char *name)
@@ -616,19 +616,19 @@ static const endpoint_row *endpoint_find(const char *name)
     return NULL;
 }
 
-int ljgap_handler_has(const char *endpoint)
+int ljgap__handler_has(const char *endpoint)
 {
     return endpoint_find(endpoint) != NULL;
 }
 
 /* The problem for a failed core status. */
-void ljgap_ans_status(ljgap_reply *out, int st, const job *j)
+void ljgap__ans_status(ljgap__reply *out, int st, const job *j)
 {
     char detail[DETAIL_LEN], head[DETAIL_LEN + 200];
     cJSON *errors = NULL, *e = NULL;
     switch (st) {
     case LJGAP_EINVAL:
-        ljgap_ans_join_warnings(detail, sizeof detail,
+        ljgap__ans_join_warnings(detail, sizeof detail,
                                 j->bad_head ? j->bad_head : "the PSD is outside the model's domain",
                                 &j->rq.warn);
         errors = cJSON_CreateArray();
@@ -638,10 +638,10 @@ void ljgap_ans_status(ljgap_reply *out, int st, const job *j)
             !cJSON_AddStringToObject(e, "detail", detail) || !cJSON_AddItemToArray(errors, e)) {
             cJSON_Delete(e);
             cJSON_Delete(errors);
-            ljgap_ans_oom(out);
+            ljgap__ans_oom(out);
             return;
         }
-        ljgap_ans_problem(out, P_OUTSIDE, detail, errors);
+        ljgap__ans_problem(out, P_OUTSIDE, detail, errors);
         return;
     case LJGAP_ECAP:
         snprintf(head, sizeof head,
@@ -649,22 +649,22 @@ void ljgap_ans_status(ljgap_reply *out, int st, const job *j)
                  "(max_seconds = %g s of wall time per request, max_work = %ld grid "
                  "point-steps); ask for a larger tol or fewer points%s",
                  limits.max_seconds, j->rq.opts.max_work, j->fail);
-        ljgap_ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        ljgap_ans_problem(out, P_CAP, detail, NULL);
+        ljgap__ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        ljgap__ans_problem(out, P_CAP, detail, NULL);
         return;
     case LJGAP_EFAIL:
         snprintf(head, sizeof head, "no finite answer could be formed%s", j->fail);
-        ljgap_ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
-        ljgap_ans_problem(out, P_NO_ANSWER, detail, NULL);
+        ljgap__ans_join_warnings(detail, sizeof detail, head, &j->rq.warn);
+        ljgap__ans_problem(out, P_NO_ANSWER, detail, NULL);
         return;
     case LJGAP_ECANCEL:
-        ljgap_ans_problem(out, P_UNAVAILABLE,
+        ljgap__ans_problem(out, P_UNAVAILABLE,
                           "the computation was cancelled (the server is "
                           "shutting down); try again",
                           NULL);
         return;
     default:
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
 }
@@ -675,7 +675,7 @@ static cJSON *parse_body(const char *body, size_t len, size_t *where)
 {
     const char *end = body;
     cJSON *root = NULL;
-    if (body && (*where = ljgap_utf8_span(body, len)) < len) return NULL;
+    if (body && (*where = ljgap__utf8_span(body, len)) < len) return NULL;
     root = body && len ? cJSON_ParseWithLengthOpts(body, len, &end, 0) : NULL;
     if (!root) {
         *where = end && body ? (size_t)(end - body) : 0;
@@ -693,11 +693,11 @@ static cJSON *parse_body(const char *body, size_t len, size_t *where)
 
 /* The 422 validation problem of ve's problems (500 when recording them ran out of memory);
  * takes ve->errors. */
-void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve)
+void ljgap__ans_invalid(ljgap__reply *out, ljgap__verr *ve)
 {
     char detail[DETAIL_LEN];
     if (ve->oom) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
     if (ve->n > LJGAP_MAX_ERRORS)
@@ -708,16 +708,16 @@ void ljgap_ans_invalid(ljgap_reply *out, ljgap_verr *ve)
     else
         snprintf(detail, sizeof detail, "%d problem%s in the request: see errors", ve->n,
                  ve->n == 1 ? "" : "s");
-    ljgap_ans_problem(out, P_VALIDATION, detail, ve->errors);
+    ljgap__ans_problem(out, P_VALIDATION, detail, ve->errors);
     ve->errors = NULL; /* reply_problem took it */
 }
 
 /* Parses body and validates it as a request to ep into j->rq. Returns 1 when it is valid;
- * else 0 with the problem (400, 422 or 500) in *out. j->rq is left for ljgap_request_free. */
-int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, ljgap_reply *out)
+ * else 0 with the problem (400, 422 or 500) in *out. j->rq is left for ljgap__request_free. */
+int ljgap__ans_validate(ljgap__endpoint ep, const char *body, size_t len, job *j, ljgap__reply *out)
 {
     cJSON *root = NULL;
-    ljgap_verr ve = {0};
+    ljgap__verr ve = {0};
     char detail[DETAIL_LEN];
     size_t where = 0;
     int ok = 0;
@@ -726,15 +726,15 @@ int ljgap_ans_validate(ljgap_endpoint ep, const char *body, size_t len, job *j, 
                  "the body is not one valid JSON value in UTF-8 (error at byte "
                  "%zu of %zu)",
                  where, len);
-        ljgap_ans_problem(out, P_MALFORMED, detail, NULL);
+        ljgap__ans_problem(out, P_MALFORMED, detail, NULL);
         goto end;
     }
     if (!(ve.errors = cJSON_CreateArray())) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         goto end;
     }
-    if (ljgap_request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
-        ljgap_ans_invalid(out, &ve);
+    if (ljgap__request_parse(ep, root, &limits, &j->rq, &ve) || ve.oom) {
+        ljgap__ans_invalid(out, &ve);
         goto end;
     }
     ok = 1;
@@ -745,15 +745,15 @@ end:
 }
 
 /* The media types an answer can take: JSON always, CSV where csv.h has a form for it. */
-const char *const ljgap_ans_forms[2] = {CT_JSON, "text/csv"};
+const char *const ljgap__ans_forms[2] = {CT_JSON, "text/csv"};
 
 /* Which form the Accept header asks for: 0 JSON, 1 CSV (only when csv is nonzero), or -1 with
  * the 406 problem in *out. */
-int ljgap_ans_negotiate(const char *accept, int csv, ljgap_reply *out)
+int ljgap__ans_negotiate(const char *accept, int csv, ljgap__reply *out)
 {
-    int k = ljgap_accept_pick(accept, ljgap_ans_forms, csv ? 2 : 1);
+    int k = ljgap__accept_pick(accept, ljgap__ans_forms, csv ? 2 : 1);
     if (k < 0)
-        ljgap_ans_problem(out, P_NOT_ACCEPTABLE,
+        ljgap__ans_problem(out, P_NOT_ACCEPTABLE,
                           csv ? "the Accept header allows neither application/json nor text/csv, "
                                 "the forms this answer has; ask for one of them or send no Accept"
                               : "the Accept header does not allow application/json, the one form "
@@ -763,48 +763,48 @@ int ljgap_ans_negotiate(const char *accept, int csv, ljgap_reply *out)
 }
 
 /* The form of endpoint's answer that call's Accept header asks for (negotiate). */
-static int form_of(const char *endpoint, const ljgap_call *call, ljgap_reply *out)
+static int form_of(const char *endpoint, const ljgap__call *call, ljgap__reply *out)
 {
-    return ljgap_ans_negotiate(call ? call->accept : NULL, ljgap_csv_offers(endpoint), out);
+    return ljgap__ans_negotiate(call ? call->accept : NULL, ljgap__csv_offers(endpoint), out);
 }
 
 /* Runs a validated request and answers it in form (0 JSON, 1 the CSV of endpoint; j->rq is
  * the caller's to free). */
-void ljgap_ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
-                    const ljgap_call *call, double t0, ljgap_reply *out)
+void ljgap__ans_run_job(job *j, int (*run)(job *), const char *endpoint, int form,
+                    const ljgap__call *call, double t0, ljgap__reply *out)
 {
     int st;
     j->deadline = t0 + limits.max_seconds;
     j->cancel = call && call->cancel ? call->cancel : limits.cancel;
     if (!(j->ans = cJSON_CreateObject())) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
     st = run(j);
-    if (!st) ljgap_ans_meta(j, t0);
+    if (!st) ljgap__ans_meta(j, t0);
     if (!st && j->oom) st = LJGAP_ENOMEM;
     if (st)
-        ljgap_ans_status(out, st, j);
+        ljgap__ans_status(out, st, j);
     else if (form == 0) {
-        /* meta is the answer's last member and cached its own last one (ljgap_ans_meta) */
-        ljgap_ans_reply_json(out, 200, CT_JSON, j->ans);
+        /* meta is the answer's last member and cached its own last one (ljgap__ans_meta) */
+        ljgap__ans_reply_json(out, 200, CT_JSON, j->ans);
         out->cacheable = out->status == 200;
-    } else if (ljgap_csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
-        ljgap_ans_oom(out);
+    } else if (ljgap__csv_render(endpoint, j->ans, j->rq.si_psd, out) != 0)
+        ljgap__ans_oom(out);
     cJSON_Delete(j->ans);
     j->ans = NULL;
-    cJSON_Delete(j->ie_meta); /* a failed run's (ljgap_ans_meta took a good one's) */
+    cJSON_Delete(j->ie_meta); /* a failed run's (ljgap__ans_meta took a good one's) */
 }
 
-void ljgap_handle(const char *endpoint, const char *body, size_t len, ljgap_reply *out)
+void ljgap__handle(const char *endpoint, const char *body, size_t len, ljgap__reply *out)
 {
-    ljgap_handle_call(endpoint, body, len, NULL, out);
+    ljgap__handle_call(endpoint, body, len, NULL, out);
 }
 
-void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const ljgap_call *call,
-                       ljgap_reply *out)
+void ljgap__handle_call(const char *endpoint, const char *body, size_t len, const ljgap__call *call,
+                       ljgap__reply *out)
 {
-    double t0 = ljgap_clock_now();
+    double t0 = ljgap__clock_now();
     const endpoint_row *r = endpoint_find(endpoint);
     job j;
     char detail[DETAIL_LEN];
@@ -816,81 +816,81 @@ void ljgap_handle_call(const char *endpoint, const char *body, size_t len, const
         snprintf(detail, sizeof detail,
                  "no endpoint \"%.*s\": the endpoints are adhesion, "
                  "traction, pdf, sweep, contact, psd and psd/combine",
-                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
+                 endpoint ? (int)ljgap__utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        ljgap_ans_problem(out, P_NOT_FOUND, detail, NULL);
+        ljgap__ans_problem(out, P_NOT_FOUND, detail, NULL);
         goto end;
     }
     if ((form = form_of(r->name, call, out)) < 0) goto end;
-    if (ljgap_ans_validate(r->ep, body, len, &j, out))
-        ljgap_ans_run_job(&j, r->run, r->name, form, call, t0, out);
+    if (ljgap__ans_validate(r->ep, body, len, &j, out))
+        ljgap__ans_run_job(&j, r->run, r->name, form, call, t0, out);
 end:
-    ljgap_request_free(&j.rq);
+    ljgap__request_free(&j.rq);
 }
 
-int ljgap_handler_has_text(const char *endpoint)
+int ljgap__handler_has_text(const char *endpoint)
 {
     return endpoint && strcmp(endpoint, "psd") == 0;
 }
 
-void ljgap_handle_text(const char *endpoint, const ljgap_param *params, size_t nparams,
-                       const char *body, size_t len, const ljgap_call *call, ljgap_reply *out)
+void ljgap__handle_text(const char *endpoint, const ljgap__param *params, size_t nparams,
+                       const char *body, size_t len, const ljgap__call *call, ljgap__reply *out)
 {
-    double t0 = ljgap_clock_now();
-    ljgap_topo_spec heights = {0};
-    ljgap_verr ve = {0};
+    double t0 = ljgap__clock_now();
+    ljgap__topo_spec heights = {0};
+    ljgap__verr ve = {0};
     cJSON *query = NULL;
     char detail[DETAIL_LEN];
     job j;
     int form;
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
-    if (!ljgap_handler_has_text(endpoint)) {
+    if (!ljgap__handler_has_text(endpoint)) {
         snprintf(detail, sizeof detail,
                  "no text upload to \"%.*s\": only psd takes a height matrix as text/plain or "
                  "text/csv; the other endpoints take JSON",
-                 endpoint ? (int)ljgap_utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
+                 endpoint ? (int)ljgap__utf8_span(endpoint, strnlen(endpoint, 60)) : 0,
                  endpoint ? endpoint : "");
-        ljgap_ans_problem(out, P_NOT_FOUND, detail, NULL);
+        ljgap__ans_problem(out, P_NOT_FOUND, detail, NULL);
         return;
     }
     if ((form = form_of(endpoint, call, out)) < 0) return;
     if (!(ve.errors = cJSON_CreateArray())) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
-    ljgap_topo_text_parse(body ? body : "", body ? len : 0, ljgap_limits_topo_cap(&limits),
+    ljgap__topo_text_parse(body ? body : "", body ? len : 0, ljgap__limits_topo_cap(&limits),
                           &heights, &ve);
-    if (!(query = ljgap_topo_params_json(params, nparams, &ve))) ve.oom = 1;
-    if (!ve.oom) ljgap_request_parse_text(query, &heights, &limits, &j.rq, &ve);
+    if (!(query = ljgap__topo_params_json(params, nparams, &ve))) ve.oom = 1;
+    if (!ve.oom) ljgap__request_parse_text(query, &heights, &limits, &j.rq, &ve);
     if (ve.n || ve.oom)
-        ljgap_ans_invalid(out, &ve);
+        ljgap__ans_invalid(out, &ve);
     else
-        ljgap_ans_run_job(&j, ljgap_run_psd, endpoint, form, call, t0, out);
+        ljgap__ans_run_job(&j, ljgap__run_psd, endpoint, form, call, t0, out);
     cJSON_Delete(query);
     cJSON_Delete(ve.errors);
     free(heights.h);
-    ljgap_request_free(&j.rq);
+    ljgap__request_free(&j.rq);
 }
 
 /* ---- for endpoints run in their own files (answer.h) ---- */
 
-const ljgap_limits *ljgap_handler_limits(void)
+const ljgap__limits *ljgap__handler_limits(void)
 {
     return &limits;
 }
 
-cJSON *ljgap_ans_put(job *j, cJSON *parent, const char *key, cJSON *item)
+cJSON *ljgap__ans_put(job *j, cJSON *parent, const char *key, cJSON *item)
 {
     return put(j, parent, key, item);
 }
 
-void ljgap_ans_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx)
+void ljgap__ans_num(job *j, cJSON *parent, const char *key, double v, const char *label, long idx)
 {
     put_num(j, parent, key, v, label, idx);
 }
 
-cJSON *ljgap_ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
+cJSON *ljgap__ans_nums(job *j, cJSON *parent, const char *key, const double *x, size_t n,
                       size_t stride, const char *label)
 {
     return put_nums(j, parent, key, x, n, stride, label);

@@ -9,7 +9,7 @@
 static const unsigned char sep[256] = {
     [' '] = 1, ['\t'] = 1, ['\r'] = 1, ['\n'] = 1, ['\v'] = 1, ['\f'] = 1, [','] = 1, ['#'] = 1};
 
-void ljgap_token_feed(ljgap_token_count *tc, const char *data, size_t n)
+void ljgap__token_feed(ljgap__token_count *tc, const char *data, size_t n)
 {
     const unsigned char *p = (const unsigned char *)data;
     size_t t = tc->tokens;
@@ -23,12 +23,12 @@ void ljgap_token_feed(ljgap_token_count *tc, const char *data, size_t n)
     tc->inside = in;
 }
 
-size_t ljgap_memest_psd_text(size_t values)
+size_t ljgap__memest_psd_text(size_t values)
 {
     return 40 * values + 4 * MIB;
 }
 
-size_t ljgap_json_values(const char *body, size_t len)
+size_t ljgap__json_values(const char *body, size_t len)
 {
     size_t n = 1;
     for (size_t i = 0; i < len; i++)
@@ -36,19 +36,19 @@ size_t ljgap_json_values(const char *body, size_t len)
     return n;
 }
 
-size_t ljgap_memest_json(size_t len, size_t values, unsigned threads)
+size_t ljgap__memest_json(size_t len, size_t values, unsigned threads)
 {
     return 128 * values + 2 * len + 8 * MIB + 2 * MIB * (size_t)(threads ? threads : 1);
 }
 
-size_t ljgap_memest_sim(int n, unsigned threads)
+size_t ljgap__memest_sim(int n, unsigned threads)
 {
     size_t N = (size_t)n * (size_t)n, nc = (size_t)n * (size_t)(n / 2 + 1);
     size_t ws = 14 * N * sizeof(double) + nc * sizeof(double) + 3 * nc * 2 * sizeof(double);
     return (size_t)(threads ? threads : 1) * ws + 4 * N * sizeof(double) + 4 * MIB;
 }
 
-size_t ljgap_memest_sim_request(const char *body, size_t len, unsigned threads)
+size_t ljgap__memest_sim_request(const char *body, size_t len, unsigned threads)
 {
     int n = 64, R = 4;
     cJSON *root = cJSON_ParseWithLength(body, len);
@@ -63,5 +63,5 @@ size_t ljgap_memest_sim_request(const char *body, size_t len, unsigned threads)
         cJSON_Delete(root);
     }
     if (threads > (unsigned)R) threads = (unsigned)R;
-    return ljgap_memest_sim(n, threads);
+    return ljgap__memest_sim(n, threads);
 }

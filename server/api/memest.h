@@ -33,22 +33,22 @@
 typedef struct {
     size_t tokens; /* runs counted so far */
     int inside;    /* the last byte seen was inside a run */
-} ljgap_token_count;
+} ljgap__token_count;
 
-void ljgap_token_feed(ljgap_token_count *tc, const char *data, size_t n);
+void ljgap__token_feed(ljgap__token_count *tc, const char *data, size_t n);
 
 /* Bytes a text PSD of `values` heights needs at most. */
-size_t ljgap_memest_psd_text(size_t values);
+size_t ljgap__memest_psd_text(size_t values);
 /* An upper bound of the values in a JSON body (cJSON's nodes): every value but the root follows
  * a '[', ',' or ':' (those inside strings only add to the bound). */
-size_t ljgap_json_values(const char *body, size_t len);
+size_t ljgap__json_values(const char *body, size_t len);
 /* Bytes a JSON computation with a body of len bytes and at most `values` values needs at most
  * (threads: of a sweep). */
-size_t ljgap_memest_json(size_t len, size_t values, unsigned threads);
+size_t ljgap__memest_json(size_t len, size_t values, unsigned threads);
 /* Bytes a simulation on an n x n grid with `threads` threads needs at most. */
-size_t ljgap_memest_sim(int n, unsigned threads);
+size_t ljgap__memest_sim(int n, unsigned threads);
 /* A simulation request's n and realizations from its JSON body (the defaults 64 and 4 when
  * absent or unreadable: the request is validated elsewhere); threads at most realizations. */
-size_t ljgap_memest_sim_request(const char *body, size_t len, unsigned threads);
+size_t ljgap__memest_sim_request(const char *body, size_t len, unsigned threads);
 
 #endif

@@ -14,7 +14,7 @@
 
 #include "textbuf.h"
 
-static const ljgap_problem_doc docs[] = {
+static const ljgap__problem_doc docs[] = {
     {"malformed-json", 400, "Malformed JSON",
      "The request body is not exactly one JSON value in UTF-8: it is empty, cut short, has "
      "text after the value, or has bytes that are not UTF-8. The detail gives the byte "
@@ -141,21 +141,21 @@ static const ljgap_problem_doc docs[] = {
 
 #define N_DOCS (sizeof docs / sizeof docs[0])
 
-const ljgap_problem_doc *ljgap_problem_find(const char *slug)
+const ljgap__problem_doc *ljgap__problem_find(const char *slug)
 {
     for (size_t i = 0; slug && i < N_DOCS; i++)
         if (strcmp(docs[i].slug, slug) == 0) return &docs[i];
     return NULL;
 }
 
-const ljgap_problem_doc *ljgap_problem_at(size_t i)
+const ljgap__problem_doc *ljgap__problem_at(size_t i)
 {
     return i < N_DOCS ? &docs[i] : NULL;
 }
 
-static void page_head(ljgap_textbuf *b, const char *title)
+static void page_head(ljgap__textbuf *b, const char *title)
 {
-    ljgap_textbuf_printf(
+    ljgap__textbuf_printf(
         b,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
@@ -165,45 +165,45 @@ static void page_head(ljgap_textbuf *b, const char *title)
         title);
 }
 
-static void page_foot(ljgap_textbuf *b)
+static void page_foot(ljgap__textbuf *b)
 {
-    ljgap_textbuf_printf(b, "<p><a href=\"" LJGAP_PROBLEM_BASE "\">All problem types</a> · "
+    ljgap__textbuf_printf(b, "<p><a href=\"" LJGAP_PROBLEM_BASE "\">All problem types</a> · "
                             "<a href=\"/\">the ljgap page</a> · "
                             "<a href=\"/openapi.json\">the API description</a></p>\n"
                             "</main>\n</body>\n</html>\n");
 }
 
-void ljgap_problem_page(const char *rest, ljgap_reply *out)
+void ljgap__problem_page(const char *rest, ljgap__reply *out)
 {
-    const ljgap_problem_doc *d = NULL;
-    ljgap_textbuf b = {0};
+    const ljgap__problem_doc *d = NULL;
+    ljgap__textbuf b = {0};
     memset(out, 0, sizeof *out);
     if (rest && rest[0]) {
-        if (!(d = ljgap_problem_find(rest))) {
-            ljgap_reply_problem(out, "not-found",
+        if (!(d = ljgap__problem_find(rest))) {
+            ljgap__reply_problem(out, "not-found",
                                 "no such problem type; the list is at " LJGAP_PROBLEM_BASE);
             return;
         }
         page_head(&b, d->title);
-        ljgap_textbuf_printf(&b,
+        ljgap__textbuf_printf(&b,
                              "<h1>%s</h1>\n<p><code>" LJGAP_PROBLEM_BASE "%s</code> · HTTP %d, "
                              "application/problem+json</p>\n<h2>What it means</h2>\n<p>%s</p>\n"
                              "<h2>How to fix the request</h2>\n<p>%s</p>\n",
                              d->title, d->slug, d->status, d->meaning, d->fix);
     } else {
         page_head(&b, "Problem types");
-        ljgap_textbuf_printf(&b, "<h1>Problem types</h1>\n<p>Every answer with a 4xx or 5xx "
+        ljgap__textbuf_printf(&b, "<h1>Problem types</h1>\n<p>Every answer with a 4xx or 5xx "
                                  "status is an RFC 9457 problem (application/problem+json) "
                                  "whose <code>type</code> is one of these pages.</p>\n<ul>\n");
         for (size_t i = 0; i < N_DOCS; i++)
-            ljgap_textbuf_printf(
+            ljgap__textbuf_printf(
                 &b, "<li><a href=\"" LJGAP_PROBLEM_BASE "%s\">%s</a>: HTTP %d, %s</li>\n",
                 docs[i].slug, docs[i].slug, docs[i].status, docs[i].title);
-        ljgap_textbuf_printf(&b, "</ul>\n");
+        ljgap__textbuf_printf(&b, "</ul>\n");
     }
     page_foot(&b);
     if (b.oom) {
-        ljgap_reply_problem(out, "out-of-memory", "the server ran out of memory");
+        ljgap__reply_problem(out, "out-of-memory", "the server ran out of memory");
         return;
     }
     out->status = 200;
@@ -213,7 +213,7 @@ void ljgap_problem_page(const char *rest, ljgap_reply *out)
 }
 
 /* "; "-joined warnings after prefix into buf. */
-void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
+void ljgap__ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w)
 {
     size_t used = (size_t)snprintf(buf, size, "%s", prefix);
     for (int i = 0; i < w->n && used < size; i++)

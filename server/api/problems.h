@@ -20,23 +20,23 @@ typedef struct {
     const char *title;   /* short, as in the answer's "title" */
     const char *meaning; /* what went wrong (one or two sentences) */
     const char *fix;     /* what to change in the request */
-} ljgap_problem_doc;
+} ljgap__problem_doc;
 
 /* The entry for slug, or NULL. */
-const ljgap_problem_doc *ljgap_problem_find(const char *slug);
+const ljgap__problem_doc *ljgap__problem_find(const char *slug);
 /* Entry i (0, 1, ...), NULL past the last. */
-const ljgap_problem_doc *ljgap_problem_at(size_t i);
+const ljgap__problem_doc *ljgap__problem_at(size_t i);
 
 /* The page of a problem type: rest is what follows /problems/ in the path ("" for the index
  * of all types). Fills *out with 200 text/html, or 404 problem+json for an unknown slug, or
- * the out-of-memory problem (free with ljgap_reply_free). */
-void ljgap_problem_page(const char *rest, ljgap_reply *out);
+ * the out-of-memory problem (free with ljgap__reply_free). */
+void ljgap__problem_page(const char *rest, ljgap__reply *out);
 
 /* A problem answer of type /problems/SLUG (its status and title from the table above) with this
  * detail and an empty errors[]. */
-void ljgap_reply_problem(ljgap_reply *out, const char *slug, const char *detail);
+void ljgap__reply_problem(ljgap__reply *out, const char *slug, const char *detail);
 
 /* "; "-joined warnings after prefix into buf (a problem's detail). */
-void ljgap_ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
+void ljgap__ans_join_warnings(char *buf, size_t size, const char *prefix, const ljgap_warnings *w);
 
 #endif

@@ -1,5 +1,5 @@
 /* psd.c -- POST /v1/psd: a measured height map's PSD as the answer (issue 15, core/topo/topo.c),
- * and an instrument file as its input (issue 28, ljgap_handle_file below).
+ * and an instrument file as its input (issue 28, ljgap__handle_file below).
  *
  * The runner of the psd endpoint, out of handler.c: the bins, the fit and the reliable band of
  * ljgap_topo_compute written as docs/api.md fixes them, and the psd object ready for the adhesion
@@ -45,21 +45,21 @@ static int fit_gives_tail(const ljgap_topo_result *r)
 /* The psd object of a table (k, P, P_err: n knots, log-log interpolated) with the tail P ∝ k^q
  * when q is finite: /v1/psd's (put_psd_object) and /v1/psd/combine's. Its variance (with the
  * tail) into *m0 (NAN when it cannot be formed). */
-void ljgap_ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
+void ljgap__ans_table_psd(job *j, const double *k, const double *P, const double *P_err, size_t n,
                          double q, double q_err, double *m0)
 {
-    cJSON *o = ljgap_ans_put(j, j->ans, "psd", cJSON_CreateObject());
+    cJSON *o = ljgap__ans_put(j, j->ans, "psd", cJSON_CreateObject());
     int tail = isfinite(q);
     ljgap_psd psd = {0}; /* ljgap_psd_table leaves it untouched when it refuses the table */
     *m0 = NAN;
-    ljgap_ans_put(j, o, "kind", cJSON_CreateString("table"));
-    ljgap_ans_nums(j, o, "k", k, n, sizeof *k, "psd.k");
-    ljgap_ans_nums(j, o, "P", P, n, sizeof *P, "psd.P");
-    ljgap_ans_nums(j, o, "P_err", P_err, n, sizeof *P_err, "psd.P_err");
+    ljgap__ans_put(j, o, "kind", cJSON_CreateString("table"));
+    ljgap__ans_nums(j, o, "k", k, n, sizeof *k, "psd.k");
+    ljgap__ans_nums(j, o, "P", P, n, sizeof *P, "psd.P");
+    ljgap__ans_nums(j, o, "P_err", P_err, n, sizeof *P_err, "psd.P_err");
     if (tail) {
-        cJSON *to = ljgap_ans_put(j, o, "tail", cJSON_CreateObject());
-        ljgap_ans_num(j, to, "exponent", q, "psd.tail", -1);
-        ljgap_ans_num(j, to, "exponent_err", q_err, "psd.tail.exponent_err", -1);
+        cJSON *to = ljgap__ans_put(j, o, "tail", cJSON_CreateObject());
+        ljgap__ans_num(j, to, "exponent", q, "psd.tail", -1);
+        ljgap__ans_num(j, to, "exponent_err", q_err, "psd.tail.exponent_err", -1);
     }
     if (ljgap_psd_table(&psd, k, P, n, tail, tail ? q : 0) == LJGAP_OK) *m0 = psd.m0;
     ljgap_psd_free(&psd);
@@ -84,10 +84,10 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
         return;
     }
     if (st == LJGAP_OK) {
-        ljgap_ans_table_psd(j, t.k, t.P, t.P_err, t.n, tail ? q : NAN, 2 * r->fit.D.err, m0);
+        ljgap__ans_table_psd(j, t.k, t.P, t.P_err, t.n, tail ? q : NAN, 2 * r->fit.D.err, m0);
         /* the knots' errors are correlated with their neighbours' (the table's solve): the
          * adhesion endpoints sample them with it (input_error) */
-        ljgap_ans_nums(j, cJSON_GetObjectItemCaseSensitive(j->ans, "psd"), "P_corr", t.corr,
+        ljgap__ans_nums(j, cJSON_GetObjectItemCaseSensitive(j->ans, "psd"), "P_corr", t.corr,
                        t.n - 1, sizeof *t.corr, "psd.P_corr");
         if (!tail)
             ljgap_warn(
@@ -98,11 +98,11 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
                                   "floor or the tip's trace?) and are kept as measured",
                 t.k[t.n - 1]);
     } else if (r->has_fit && r->fit.sound && q < -2) {
-        o = ljgap_ans_put(j, j->ans, "psd", cJSON_CreateObject());
-        ljgap_ans_put(j, o, "kind", cJSON_CreateString("power"));
-        ljgap_ans_num(j, o, "D", r->fit.D.value, "psd.D", -1);
-        ljgap_ans_num(j, o, "k1", k_from, "psd.k1", -1);
-        ljgap_ans_num(j, o, "C", r->fit.C.value, "psd.C", -1);
+        o = ljgap__ans_put(j, j->ans, "psd", cJSON_CreateObject());
+        ljgap__ans_put(j, o, "kind", cJSON_CreateString("power"));
+        ljgap__ans_num(j, o, "D", r->fit.D.value, "psd.D", -1);
+        ljgap__ans_num(j, o, "k1", k_from, "psd.k1", -1);
+        ljgap__ans_num(j, o, "C", r->fit.C.value, "psd.C", -1);
         ljgap_warn(&j->rq.warn,
                    "the theory's band starts at k1 = %g 1/m, beyond the reliable bins: the psd "
                    "object is the fitted power law, extrapolated",
@@ -111,7 +111,7 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
                             r->fit.C.value) == LJGAP_OK)
             *m0 = psd.m0;
     } else {
-        ljgap_ans_put(j, j->ans, "psd", cJSON_CreateNull());
+        ljgap__ans_put(j, j->ans, "psd", cJSON_CreateNull());
         ljgap_warn(&j->rq.warn,
                    "no psd object: no reliable bin lies above k = %g 1/m and the "
                    "fit gives no sound power law with 2 < D < 3 to extrapolate",
@@ -123,8 +123,8 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
 /* With a material: where the band [kf, kl] (its name: "reliable band", ...) lies against the
  * theory's k > k0/χ and the k1 it proposes (kf, or K1_MARGIN k0/χ when that is higher) into
  * d and the answer's "domain"; the caller then writes the psd object from d->k1 and ends with
- * ljgap_ans_domain_end and the object's variance. /v1/psd's and /v1/psd/combine's. */
-void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap_domain *d)
+ * ljgap__ans_domain_end and the object's variance. /v1/psd's and /v1/psd/combine's. */
+void ljgap__ans_domain_begin(job *j, double kf, double kl, const char *band, ljgap__domain *d)
 {
     const ljgap_material *m = &j->rq.mat;
     double chi = ljgap_units_chi(m);
@@ -134,26 +134,26 @@ void ljgap_ans_domain_begin(job *j, double kf, double kl, const char *band, ljga
     d->band = band;
     d->k1 = fmax(kf, K1_MARGIN * d->kd);
     d->inside = kl <= d->kd ? 0 : kf > d->kd ? 1 : log(kl / d->kd) / log(kl / kf);
-    d->obj = ljgap_ans_put(j, j->ans, "domain", cJSON_CreateObject());
-    ljgap_ans_num(j, d->obj, "k0", d->kd, "domain.k0", -1);
-    ljgap_ans_put(j, d->obj, "inside",
+    d->obj = ljgap__ans_put(j, j->ans, "domain", cJSON_CreateObject());
+    ljgap__ans_num(j, d->obj, "k0", d->kd, "domain.k0", -1);
+    ljgap__ans_put(j, d->obj, "inside",
                   cJSON_CreateString(d->inside == 1   ? "all"
                                      : d->inside == 0 ? "none"
                                                       : "part"));
-    ljgap_ans_num(j, d->obj, "fraction", d->inside, "domain.fraction", -1);
-    ljgap_ans_num(j, d->obj, "k1", d->k1, "domain.k1", -1);
-    ljgap_ans_num(j, d->obj, "k1_dimensionless", d->k1 * chi, "domain.k1_dimensionless", -1);
+    ljgap__ans_num(j, d->obj, "fraction", d->inside, "domain.fraction", -1);
+    ljgap__ans_num(j, d->obj, "k1", d->k1, "domain.k1", -1);
+    ljgap__ans_num(j, d->obj, "k1_dimensionless", d->k1 * chi, "domain.k1_dimensionless", -1);
 }
 
-void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0)
+void ljgap__ans_domain_end(job *j, const ljgap__domain *d, double m0)
 {
     if (isfinite(m0)) {
-        ljgap_ans_num(j, d->obj, "h_rms", sqrt(m0), "domain.h_rms", -1);
-        ljgap_ans_num(j, d->obj, "m0_dimensionless", ljgap_units_var_to_dimless(&j->rq.mat, m0),
+        ljgap__ans_num(j, d->obj, "h_rms", sqrt(m0), "domain.h_rms", -1);
+        ljgap__ans_num(j, d->obj, "m0_dimensionless", ljgap_units_var_to_dimless(&j->rq.mat, m0),
                       "domain.m0_dimensionless", -1);
     } else {
-        ljgap_ans_put(j, d->obj, "h_rms", cJSON_CreateNull());
-        ljgap_ans_put(j, d->obj, "m0_dimensionless", cJSON_CreateNull());
+        ljgap__ans_put(j, d->obj, "h_rms", cJSON_CreateNull());
+        ljgap__ans_put(j, d->obj, "m0_dimensionless", cJSON_CreateNull());
     }
     if (d->inside < 1)
         ljgap_warn(&j->rq.warn,
@@ -165,16 +165,16 @@ void ljgap_ans_domain_end(job *j, const ljgap_domain *d, double m0)
 /* With a material: the domain of the reliable band and the psd object from its k1. */
 static void put_domain(job *j, const ljgap_topo_result *r)
 {
-    ljgap_domain d;
+    ljgap__domain d;
     double m0;
-    ljgap_ans_domain_begin(j, r->rel_kmin, r->k[r->rel_last], "reliable band", &d);
+    ljgap__ans_domain_begin(j, r->rel_kmin, r->k[r->rel_last], "reliable band", &d);
     put_psd_object(j, r, d.k1, &m0);
-    ljgap_ans_domain_end(j, &d, m0);
+    ljgap__ans_domain_end(j, &d, m0);
 }
 
-int ljgap_run_psd(job *j)
+int ljgap__run_psd(job *j)
 {
-    ljgap_topo_spec *t = &j->rq.topo;
+    ljgap__topo_spec *t = &j->rq.topo;
     ljgap_topo_grid g = {t->nx, t->ny, t->dx, t->dy, t->periodic};
     ljgap_topo_opts o;
     ljgap_topo_result r;
@@ -197,76 +197,76 @@ int ljgap_run_psd(job *j)
         return LJGAP_EINVAL;
     }
     if (st) return st;
-    ljgap_ans_nums(j, j->ans, "k", r.k, r.n, sizeof *r.k, "k");
-    ljgap_ans_nums(j, j->ans, "P", r.P, r.n, sizeof *r.P, "P");
-    ljgap_ans_nums(j, j->ans, "modes", r.modes, r.n, sizeof *r.modes, "modes");
-    ljgap_ans_num(j, j->ans, "h_rms", r.h_rms.value, "h_rms", -1);
-    ljgap_ans_num(j, j->ans, "rms_slope", r.rms_slope.value, "rms_slope", -1);
-    grid = ljgap_ans_put(j, j->ans, "grid", cJSON_CreateObject());
-    ljgap_ans_put(j, grid, "nx", cJSON_CreateNumber((double)t->nx));
-    ljgap_ans_put(j, grid, "ny", cJSON_CreateNumber((double)t->ny));
-    ljgap_ans_num(j, grid, "dx", t->dx, "grid.dx", -1);
-    ljgap_ans_num(j, grid, "dy", t->dy, "grid.dy", -1);
-    ljgap_ans_put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
-    ljgap_ans_put(j, grid, "profile", cJSON_CreateBool(r.profile));
-    ljgap_ans_put(j, grid, "detrend",
+    ljgap__ans_nums(j, j->ans, "k", r.k, r.n, sizeof *r.k, "k");
+    ljgap__ans_nums(j, j->ans, "P", r.P, r.n, sizeof *r.P, "P");
+    ljgap__ans_nums(j, j->ans, "modes", r.modes, r.n, sizeof *r.modes, "modes");
+    ljgap__ans_num(j, j->ans, "h_rms", r.h_rms.value, "h_rms", -1);
+    ljgap__ans_num(j, j->ans, "rms_slope", r.rms_slope.value, "rms_slope", -1);
+    grid = ljgap__ans_put(j, j->ans, "grid", cJSON_CreateObject());
+    ljgap__ans_put(j, grid, "nx", cJSON_CreateNumber((double)t->nx));
+    ljgap__ans_put(j, grid, "ny", cJSON_CreateNumber((double)t->ny));
+    ljgap__ans_num(j, grid, "dx", t->dx, "grid.dx", -1);
+    ljgap__ans_num(j, grid, "dy", t->dy, "grid.dy", -1);
+    ljgap__ans_put(j, grid, "periodic", cJSON_CreateBool(t->periodic));
+    ljgap__ans_put(j, grid, "profile", cJSON_CreateBool(r.profile));
+    ljgap__ans_put(j, grid, "detrend",
                   cJSON_CreateString(r.profile && r.detrend == LJGAP_DETREND_PLANE
                                          ? "line"
                                          : ljgap_topo_detrend_name(r.detrend)));
-    ljgap_ans_put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
-    ljgap_ans_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
-    ljgap_ans_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
-    if (j->rq.source) { /* an instrument file: what it said (ljgap_handle_file) */
-        ljgap_ans_put(j, j->ans, "source", j->rq.source);
+    ljgap__ans_put(j, grid, "window", cJSON_CreateString(t->periodic ? "none" : "hann"));
+    ljgap__ans_num(j, grid, "k_min", r.k_fund, "grid.k_min", -1);
+    ljgap__ans_num(j, grid, "k_max", r.k_nyq, "grid.k_max", -1);
+    if (j->rq.source) { /* an instrument file: what it said (ljgap__handle_file) */
+        ljgap__ans_put(j, j->ans, "source", j->rq.source);
         j->rq.source = NULL;
     }
-    rel = ljgap_ans_put(j, j->ans, "reliable", cJSON_CreateObject());
-    ljgap_ans_num(j, rel, "k_min", r.rel_kmin, "reliable.k_min", -1);
-    ljgap_ans_num(j, rel, "k_max", r.rel_kmax, "reliable.k_max", -1);
-    ljgap_ans_put(j, rel, "by",
+    rel = ljgap__ans_put(j, j->ans, "reliable", cJSON_CreateObject());
+    ljgap__ans_num(j, rel, "k_min", r.rel_kmin, "reliable.k_min", -1);
+    ljgap__ans_num(j, rel, "k_max", r.rel_kmax, "reliable.k_max", -1);
+    ljgap__ans_put(j, rel, "by",
                   cJSON_CreateString(r.rel_by == LJGAP_RELIABLE_TIP          ? "tip"
                                      : r.rel_by == LJGAP_RELIABLE_RESOLUTION ? "resolution"
                                      : r.rel_by == LJGAP_RELIABLE_NOISE      ? "noise"
                                                                              : "nyquist"));
-    err = ljgap_ans_put(j, j->ans, "error", cJSON_CreateObject());
-    ljgap_ans_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
-    ljgap_ans_num(j, err, "h_rms", r.h_rms.err, "error.h_rms", -1);
-    ljgap_ans_num(j, err, "rms_slope", r.rms_slope.err, "error.rms_slope", -1);
+    err = ljgap__ans_put(j, j->ans, "error", cJSON_CreateObject());
+    ljgap__ans_nums(j, err, "P", r.P_err, r.n, sizeof *r.P_err, "error.P");
+    ljgap__ans_num(j, err, "h_rms", r.h_rms.err, "error.h_rms", -1);
+    ljgap__ans_num(j, err, "rms_slope", r.rms_slope.err, "error.rms_slope", -1);
     if (r.has_fit) {
-        fit = ljgap_ans_put(j, j->ans, "fit", cJSON_CreateObject());
-        efit = ljgap_ans_put(j, err, "fit", cJSON_CreateObject());
-        ljgap_ans_num(j, fit, "D", r.fit.D.value, "fit.D", -1);
-        ljgap_ans_num(j, fit, "H", 3 - r.fit.D.value, "fit.H", -1);
-        ljgap_ans_num(j, fit, "C", r.fit.C.value, "fit.C", -1);
-        ljgap_ans_num(j, fit, "k_min", r.fit.kmin, "fit.k_min", -1);
-        ljgap_ans_num(j, fit, "k_max", r.fit.kmax, "fit.k_max", -1);
-        ljgap_ans_put(j, fit, "bins", cJSON_CreateNumber((double)r.fit.bins));
-        ljgap_ans_num(j, fit, "chi2_red", r.fit.chi2_red, "fit.chi2_red", -1);
-        ljgap_ans_num(j, fit, "corr_lnC_D", r.fit.corr, "fit.corr_lnC_D", -1);
-        ljgap_ans_put(j, fit, "band", cJSON_CreateString(r.fit.given ? "given" : "detected"));
-        ljgap_ans_put(j, fit, "sound", cJSON_CreateBool(r.fit.sound));
-        ljgap_ans_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
-        ljgap_ans_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
-        ljgap_ans_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);
+        fit = ljgap__ans_put(j, j->ans, "fit", cJSON_CreateObject());
+        efit = ljgap__ans_put(j, err, "fit", cJSON_CreateObject());
+        ljgap__ans_num(j, fit, "D", r.fit.D.value, "fit.D", -1);
+        ljgap__ans_num(j, fit, "H", 3 - r.fit.D.value, "fit.H", -1);
+        ljgap__ans_num(j, fit, "C", r.fit.C.value, "fit.C", -1);
+        ljgap__ans_num(j, fit, "k_min", r.fit.kmin, "fit.k_min", -1);
+        ljgap__ans_num(j, fit, "k_max", r.fit.kmax, "fit.k_max", -1);
+        ljgap__ans_put(j, fit, "bins", cJSON_CreateNumber((double)r.fit.bins));
+        ljgap__ans_num(j, fit, "chi2_red", r.fit.chi2_red, "fit.chi2_red", -1);
+        ljgap__ans_num(j, fit, "corr_lnC_D", r.fit.corr, "fit.corr_lnC_D", -1);
+        ljgap__ans_put(j, fit, "band", cJSON_CreateString(r.fit.given ? "given" : "detected"));
+        ljgap__ans_put(j, fit, "sound", cJSON_CreateBool(r.fit.sound));
+        ljgap__ans_num(j, efit, "D", r.fit.D.err, "error.fit.D", -1);
+        ljgap__ans_num(j, efit, "H", r.fit.D.err, "error.fit.H", -1);
+        ljgap__ans_num(j, efit, "C", r.fit.C.err, "error.fit.C", -1);
         if (r.fit.noise_floor > 0) { /* a white floor fitted with the law (m⁴) */
-            ljgap_ans_num(j, fit, "noise_floor", r.fit.noise_floor, "fit.noise_floor", -1);
-            ljgap_ans_num(j, efit, "noise_floor", r.fit.noise_floor_err, "error.fit.noise_floor",
+            ljgap__ans_num(j, fit, "noise_floor", r.fit.noise_floor, "fit.noise_floor", -1);
+            ljgap__ans_num(j, efit, "noise_floor", r.fit.noise_floor_err, "error.fit.noise_floor",
                           -1);
         } else {
-            ljgap_ans_put(j, fit, "noise_floor", cJSON_CreateNull());
-            ljgap_ans_put(j, efit, "noise_floor", cJSON_CreateNull());
+            ljgap__ans_put(j, fit, "noise_floor", cJSON_CreateNull());
+            ljgap__ans_put(j, efit, "noise_floor", cJSON_CreateNull());
         }
     } else {
-        ljgap_ans_put(j, j->ans, "fit", cJSON_CreateNull());
-        ljgap_ans_put(j, err, "fit", cJSON_CreateNull());
+        ljgap__ans_put(j, j->ans, "fit", cJSON_CreateNull());
+        ljgap__ans_put(j, err, "fit", cJSON_CreateNull());
     }
     if (r.profile) {
-        pr = ljgap_ans_put(j, j->ans, "profile", cJSON_CreateObject());
-        ljgap_ans_nums(j, pr, "PP", r.PP, r.n, sizeof *r.PP, "profile.PP");
-        ljgap_ans_num(j, pr, "alpha", r.alpha.value, "profile.alpha", -1);
-        pr = ljgap_ans_put(j, err, "profile", cJSON_CreateObject());
-        ljgap_ans_nums(j, pr, "PP", r.PP_err, r.n, sizeof *r.PP_err, "error.profile.PP");
-        ljgap_ans_num(j, pr, "alpha", r.alpha.err, "error.profile.alpha", -1);
+        pr = ljgap__ans_put(j, j->ans, "profile", cJSON_CreateObject());
+        ljgap__ans_nums(j, pr, "PP", r.PP, r.n, sizeof *r.PP, "profile.PP");
+        ljgap__ans_num(j, pr, "alpha", r.alpha.value, "profile.alpha", -1);
+        pr = ljgap__ans_put(j, err, "profile", cJSON_CreateObject());
+        ljgap__ans_nums(j, pr, "PP", r.PP_err, r.n, sizeof *r.PP_err, "error.profile.PP");
+        ljgap__ans_num(j, pr, "alpha", r.alpha.err, "error.profile.alpha", -1);
         ljgap_warn(&j->rq.warn,
                    "one profile: its 1-D PSD PP ∝ k^-%.3g was turned into the isotropic PSD P = "
                    "F(α) PP/k, which assumes an isotropic surface",
@@ -280,7 +280,7 @@ int ljgap_run_psd(job *j)
         put_domain(j, &r);
     else
         put_psd_object(j, &r, 0, &m0);
-    ljgap_ans_si(j);
+    ljgap__ans_si(j);
     ljgap_topo_result_free(&r);
     return LJGAP_OK;
 }
@@ -299,7 +299,7 @@ int ljgap_run_psd(job *j)
  * feeds the reliable band).
  *
  * Missing points (NaN, a mask, a "no data" value): the PSD is that of the largest complete
- * rectangle of the map (files.h: ljgap_files_largest_rect), which is neither padded nor
+ * rectangle of the map (files.h: ljgap__files_largest_rect), which is neither padded nor
  * interpolated, so the periodogram and its error statistics stay those of a complete map;
  * source.missing says how many points were missing and which rectangle was used, and a
  * warning says it too. A cropped map is not periodic.
@@ -314,10 +314,10 @@ int ljgap_run_psd(job *j)
 #define HEIGHT_MAX 1e3 /* |height| in m, as request_topo.c's */
 
 /* A problem with the format, offset and member of a bad file (problems.c's row for slug). */
-static void file_problem(ljgap_reply *out, const char *slug, const char *detail,
-                         const ljgap_files_err *e)
+static void file_problem(ljgap__reply *out, const char *slug, const char *detail,
+                         const ljgap__files_err *e)
 {
-    const ljgap_problem_doc *k = ljgap_problem_find(slug);
+    const ljgap__problem_doc *k = ljgap__problem_find(slug);
     cJSON *p = cJSON_CreateObject();
     char type[80];
     snprintf(type, sizeof type, LJGAP_PROBLEM_BASE "%s", slug);
@@ -330,33 +330,33 @@ static void file_problem(ljgap_reply *out, const char *slug, const char *detail,
         (e && e->offset >= 0 && !cJSON_AddNumberToObject(p, "offset", (double)e->offset)) ||
         (e && e->member[0] && !cJSON_AddStringToObject(p, "member", e->member))) {
         cJSON_Delete(p);
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
-    ljgap_ans_reply_json(out, k->status, CT_PROBLEM, p);
+    ljgap__ans_reply_json(out, k->status, CT_PROBLEM, p);
     cJSON_Delete(p);
 }
 
 /* A 422 validation problem with one error at ptr. */
-static void one_error(ljgap_reply *out, const char *ptr, const char *detail)
+static void one_error(ljgap__reply *out, const char *ptr, const char *detail)
 {
-    ljgap_verr ve = {cJSON_CreateArray(), 0, 0};
+    ljgap__verr ve = {cJSON_CreateArray(), 0, 0};
     if (!ve.errors) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         return;
     }
-    ljgap_verr_add(&ve, ptr, "%s", detail);
-    ljgap_ans_invalid(out, &ve);
+    ljgap__verr_add(&ve, ptr, "%s", detail);
+    ljgap__ans_invalid(out, &ve);
     cJSON_Delete(ve.errors);
 }
 
 /* The answer to a failed read (st: files.h's status). */
-static void read_failed(ljgap_reply *out, int st, const ljgap_files_err *e)
+static void read_failed(ljgap__reply *out, int st, const ljgap__files_err *e)
 {
     char detail[900], names[600];
     switch (st) {
     case LJGAP_FILES_UNKNOWN:
-        ljgap_files_names(names, sizeof names);
+        ljgap__files_names(names, sizeof names);
         snprintf(detail, sizeof detail,
                  "the body is no file of a format read here (recognised by its content): "
                  "%s; a height matrix as text goes as text/plain",
@@ -382,12 +382,12 @@ static void read_failed(ljgap_reply *out, int st, const ljgap_files_err *e)
         file_problem(out, "content-too-large", detail, NULL);
         return;
     default:
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
     }
 }
 
 /* "format" and "channel" out of the query (kept in *format, *channel); the rest into rest. */
-static size_t split_params(const ljgap_param *p, size_t np, ljgap_param *rest, const char **format,
+static size_t split_params(const ljgap__param *p, size_t np, ljgap__param *rest, const char **format,
                            const char **channel)
 {
     size_t k = 0;
@@ -405,7 +405,7 @@ static size_t split_params(const ljgap_param *p, size_t np, ljgap_param *rest, c
 }
 
 /* The answer's "source": what the file said, and which points were used. */
-static cJSON *source_json(const ljgap_files_map *m, size_t x0, size_t y0, size_t w, size_t h)
+static cJSON *source_json(const ljgap__files_map *m, size_t x0, size_t y0, size_t w, size_t h)
 {
     cJSON *s = cJSON_CreateObject(), *ch, *miss, *used;
     if (!s || !cJSON_AddStringToObject(s, "format", m->format) ||
@@ -452,7 +452,7 @@ static int default_num(cJSON *topo, const char *name, double x)
 
 /* The file's spacings and stored options into the query's topography object; a problem
  * (pointer, detail) when the query's dx, dy clash with the file's size or are missing. */
-static const char *file_defaults(cJSON *query, const ljgap_files_map *m, size_t w, size_t h,
+static const char *file_defaults(cJSON *query, const ljgap__files_map *m, size_t w, size_t h,
                                  char *detail, size_t size)
 {
     cJSON *topo = cJSON_GetObjectItemCaseSensitive(query, "topography");
@@ -486,7 +486,7 @@ static const char *file_defaults(cJSON *query, const ljgap_files_map *m, size_t 
 
 /* The heights of the rectangle (x0, y0, w, h) of the map, each within ±HEIGHT_MAX; NULL with
  * a detail when one is not (else out of memory). */
-static double *crop(ljgap_files_map *m, size_t x0, size_t y0, size_t w, size_t h, char *detail,
+static double *crop(ljgap__files_map *m, size_t x0, size_t y0, size_t w, size_t h, char *detail,
                     size_t size)
 {
     /* the whole map: its heights are taken over, not copied */
@@ -509,18 +509,18 @@ static double *crop(ljgap_files_map *m, size_t x0, size_t y0, size_t w, size_t h
     return z;
 }
 
-void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t nparams,
-                       const unsigned char *body, size_t len, const ljgap_call *call,
-                       ljgap_reply *out)
+void ljgap__handle_file(const char *endpoint, const ljgap__param *params, size_t nparams,
+                       const unsigned char *body, size_t len, const ljgap__call *call,
+                       ljgap__reply *out)
 {
-    double t0 = ljgap_clock_now();
-    const ljgap_limits *lim = ljgap_handler_limits();
-    ljgap_param *rest = NULL;
+    double t0 = ljgap__clock_now();
+    const ljgap__limits *lim = ljgap__handler_limits();
+    ljgap__param *rest = NULL;
     const char *format, *channel, *ptr;
-    ljgap_files_map m;
-    ljgap_files_err e;
-    ljgap_topo_spec heights = {0};
-    ljgap_verr ve = {0};
+    ljgap__files_map m;
+    ljgap__files_err e;
+    ljgap__topo_spec heights = {0};
+    ljgap__verr ve = {0};
     cJSON *query = NULL;
     char detail[700] = "";
     size_t x0 = 0, y0 = 0, w, h;
@@ -529,39 +529,39 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
     memset(&j, 0, sizeof j);
     memset(out, 0, sizeof *out);
     memset(&m, 0, sizeof m);
-    if (!ljgap_handler_has_text(endpoint)) {
-        ljgap_ans_problem(out, P_NOT_FOUND, "only psd takes an instrument file", NULL);
+    if (!ljgap__handler_has_text(endpoint)) {
+        ljgap__ans_problem(out, P_NOT_FOUND, "only psd takes an instrument file", NULL);
         return;
     }
-    if ((form = ljgap_ans_negotiate(call ? call->accept : NULL, 0, out)) < 0) return;
+    if ((form = ljgap__ans_negotiate(call ? call->accept : NULL, 0, out)) < 0) return;
     if (!(rest = malloc((nparams ? nparams : 1) * sizeof *rest)) ||
         !(ve.errors = cJSON_CreateArray())) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         goto end;
     }
     size_t nrest = split_params(params, nparams, rest, &format, &channel);
     /* an unknown or repeated query parameter is refused before the file is read */
-    if (!(query = ljgap_topo_params_json(rest, nrest, &ve))) {
-        ljgap_ans_oom(out);
+    if (!(query = ljgap__topo_params_json(rest, nrest, &ve))) {
+        ljgap__ans_oom(out);
         goto end;
     }
     if (ve.n) {
-        ljgap_ans_invalid(out, &ve);
+        ljgap__ans_invalid(out, &ve);
         goto end;
     }
-    if (format && *format && !ljgap_files_find(format)) {
+    if (format && *format && !ljgap__files_find(format)) {
         char names[600];
-        ljgap_files_names(names, sizeof names);
+        ljgap__files_names(names, sizeof names);
         snprintf(detail, sizeof detail, "no format \"%.32s\": the formats read are %s", format,
                  names);
         one_error(out, "/format", detail);
         goto end;
     }
-    if ((st = ljgap_files_read(body, len, format, channel, &m, &e))) {
+    if ((st = ljgap__files_read(body, len, format, channel, &m, &e))) {
         read_failed(out, st, &e);
         goto end;
     }
-    double unit = m.z_unit[0] ? ljgap_files_unit_scale(m.z_unit) : 1;
+    double unit = m.z_unit[0] ? ljgap__files_unit_scale(m.z_unit) : 1;
     if (!(unit > 0)) {
         snprintf(detail, sizeof detail,
                  "channel %d \"%s\" of the %s file is in %s, not a length: choose a height "
@@ -574,20 +574,20 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
         ljgap_warn(&j.rq.warn, "the %s file states no height unit: its heights are taken as m",
                    m.format);
     w = m.nx, h = m.ny;
-    if (m.missing && ljgap_files_largest_rect(&m, &x0, &y0, &w, &h)) {
-        ljgap_ans_oom(out);
+    if (m.missing && ljgap__files_largest_rect(&m, &x0, &y0, &w, &h)) {
+        ljgap__ans_oom(out);
         goto end;
     }
-    if ((size_t)w * h > ljgap_limits_topo_cap(lim)) {
+    if ((size_t)w * h > ljgap__limits_topo_cap(lim)) {
         snprintf(detail, sizeof detail,
                  "the map has %zu x %zu points, more than the %zu this server takes", w, h,
-                 ljgap_limits_topo_cap(lim));
+                 ljgap__limits_topo_cap(lim));
         file_problem(out, "content-too-large", detail, NULL);
         goto end;
     }
     if ((ptr = file_defaults(query, &m, w, h, detail, sizeof detail))) {
         if (!*ptr)
-            ljgap_ans_oom(out);
+            ljgap__ans_oom(out);
         else
             one_error(out, ptr, detail);
         goto end;
@@ -596,15 +596,15 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
         if (detail[0])
             one_error(out, "/topography/heights", detail);
         else
-            ljgap_ans_oom(out);
+            ljgap__ans_oom(out);
         goto end;
     }
     heights.nx = w, heights.ny = h;
     /* parse_text starts a fresh request: the warnings so far go in after it */
     ljgap_warnings early = j.rq.warn;
-    ljgap_request_parse_text(query, &heights, lim, &j.rq, &ve);
+    ljgap__request_parse_text(query, &heights, lim, &j.rq, &ve);
     if (ve.n || ve.oom) {
-        ljgap_ans_invalid(out, &ve);
+        ljgap__ans_invalid(out, &ve);
         goto end;
     }
     for (int i = 0; i < early.n; i++)
@@ -615,16 +615,16 @@ void ljgap_handle_file(const char *endpoint, const ljgap_param *params, size_t n
                    "complete rectangle, %zu x %zu points from column %zu, row %zu",
                    m.missing, m.nx * m.ny, w, h, x0, y0);
     if (!(j.rq.source = source_json(&m, x0, y0, w, h))) {
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
         goto end;
     }
-    ljgap_files_map_free(&m);
-    ljgap_ans_run_job(&j, ljgap_run_psd, endpoint, form, call, t0, out);
+    ljgap__files_map_free(&m);
+    ljgap__ans_run_job(&j, ljgap__run_psd, endpoint, form, call, t0, out);
 end:
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     free(heights.h);
     free(rest);
     cJSON_Delete(query);
     cJSON_Delete(ve.errors);
-    ljgap_request_free(&j.rq);
+    ljgap__request_free(&j.rq);
 }

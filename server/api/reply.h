@@ -12,15 +12,15 @@
 
 typedef struct {
     int status;               /* HTTP status code */
-    char *body;               /* malloc'd, NUL-terminated; free with ljgap_reply_free */
+    char *body;               /* malloc'd, NUL-terminated; free with ljgap__reply_free */
     size_t len;               /* strlen(body) */
     const char *content_type; /* "application/json", "application/problem+json", text/csv
                                * (csv.h) or text/html (problems.h) */
-    int cacheable;            /* set by the handler (ljgap_handle_call) on a 200 JSON answer
+    int cacheable;            /* set by the handler (ljgap__handle_call) on a 200 JSON answer
                                * whose body ends with LJGAP_REPLY_UNCACHED_TAIL: a cache may
                                * keep it with that tail replaced by LJGAP_REPLY_CACHED_TAIL.
                                * 0 for everything else (CSV, problems, pages). */
-} ljgap_reply;
+} ljgap__reply;
 
 /* The last bytes of a cacheable answer (meta.cached, meta's last member, meta the answer's last)
  * and what a cache answers instead. */
@@ -28,6 +28,6 @@ typedef struct {
 #define LJGAP_REPLY_CACHED_TAIL "\"cached\":true}}"
 
 /* Frees r->body and empties *r (NULL is fine). */
-void ljgap_reply_free(ljgap_reply *r);
+void ljgap__reply_free(ljgap__reply *r);
 
 #endif

@@ -1,4 +1,4 @@
-/* request.c -- validation of compute requests (docs/api.md) into ljgap_request.
+/* request.c -- validation of compute requests (docs/api.md) into ljgap__request.
  *
  * Bad input is the caller's: everything the contract rules out is caught here, before the
  * core runs, and reported with a JSON pointer (RFC 6901) and one clear sentence. The walk
@@ -20,14 +20,14 @@
  * "units":"SI" says the psd object is in SI (k in 1/m, C in m^(2D-4), m0 in m², h_rms in m,
  * table P in m⁴). The psd is converted here (core/units.c), before the k1 > k0 check, which
  * is a statement about χk1. Only a power law's C waits: its conversion depends on D, which a
- * sweep may vary, so ljgap_psd_from_spec converts it. Everything else (g_ave, grids, pdf
+ * sweep may vary, so ljgap__psd_from_spec converts it. Everything else (g_ave, grids, pdf
  * cut-offs) stays dimensionless.
  *
  * psd takes a height map instead (issue 15): request_topo.c checks it with the validators
- * below (ljgap_v_*).
+ * below (ljgap__v_*).
  */
 #include "request.h"
-#include "textbuf.h" /* ljgap_utf8_span */
+#include "textbuf.h" /* ljgap__utf8_span */
 
 #include <math.h>
 #include <stdarg.h>
@@ -62,7 +62,7 @@ static const char *const range_fields[] = {"min", "max", "n", NULL};
 static const char *const sim_fields[] = {"psd", "n",       "L", "realizations", "seed", "g_ave",
                                          "tol", "k_split", NULL};
 
-void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
+void ljgap__verr_add(ljgap__verr *e, const char *ptr, const char *fmt, ...)
 {
     char detail[400];
     va_list ap;
@@ -85,7 +85,7 @@ void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
 /* Bytes of s to quote in a message: at most max, whole characters only. */
 static int quote_len(const char *s, size_t max)
 {
-    return (int)ljgap_utf8_span(s, strnlen(s, max));
+    return (int)ljgap__utf8_span(s, strnlen(s, max));
 }
 
 /* Pointer base + "/" + key with ~ and / escaped (RFC 6901 §3); malloc'd, NULL on OOM. */
@@ -117,7 +117,7 @@ static int in_list(const char *name, const char *const *list)
 }
 
 /* Every member of obj (pointer base) must be named in a or b, and appear once. */
-static void only_fields(ljgap_verr *e, const cJSON *obj, const char *base, const char *const *a,
+static void only_fields(ljgap__verr *e, const cJSON *obj, const char *base, const char *const *a,
                         const char *const *b)
 {
     const cJSON *it;
@@ -135,9 +135,9 @@ static void only_fields(ljgap_verr *e, const cJSON *obj, const char *base, const
             return;
         }
         if (dup)
-            ljgap_verr_add(e, ptr, "field \"%s\" appears more than once", it->string);
+            ljgap__verr_add(e, ptr, "field \"%s\" appears more than once", it->string);
         else
-            ljgap_verr_add(e, ptr,
+            ljgap__verr_add(e, ptr,
                            "unknown field \"%.*s\" (a typo? it is not part of this "
                            "request in the v1 contract)",
                            quote_len(it->string, 60), it->string);
@@ -151,27 +151,27 @@ static const cJSON *member(const cJSON *obj, const char *name)
 }
 
 /* obj[name], recording "missing" at base/name when absent. */
-static const cJSON *required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+static const cJSON *required(ljgap__verr *e, const cJSON *obj, const char *base, const char *name,
                              const char *what)
 {
     const cJSON *it = member(obj, name);
     if (!it) {
         char ptr[PTR_LEN];
         snprintf(ptr, sizeof ptr, "%s/%s", base, name);
-        ljgap_verr_add(e, ptr, "missing required field \"%s\" (%s)", name, what);
+        ljgap__verr_add(e, ptr, "missing required field \"%s\" (%s)", name, what);
     }
     return it;
 }
 
 /* A finite JSON number at it (pointer ptr) into *x; records the problem and returns 0 if not. */
-static int num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+static int num(ljgap__verr *e, const cJSON *it, const char *ptr, double *x)
 {
     if (!cJSON_IsNumber(it)) {
-        ljgap_verr_add(e, ptr, "must be a number");
+        ljgap__verr_add(e, ptr, "must be a number");
         return 0;
     }
     if (!isfinite(it->valuedouble)) {
-        ljgap_verr_add(e, ptr, "must be a finite number (this one overflows a double)");
+        ljgap__verr_add(e, ptr, "must be a finite number (this one overflows a double)");
         return 0;
     }
     *x = it->valuedouble;
@@ -179,38 +179,38 @@ static int num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
 }
 
 /* A finite number > 0. */
-static int num_pos(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+static int num_pos(ljgap__verr *e, const cJSON *it, const char *ptr, double *x)
 {
     if (!num(e, it, ptr, x)) return 0;
     if (!(*x > 0)) {
-        ljgap_verr_add(e, ptr, "must be positive (got %g)", *x);
+        ljgap__verr_add(e, ptr, "must be positive (got %g)", *x);
         return 0;
     }
     return 1;
 }
 
 /* An integer-valued number in [lo, hi]. */
-static int num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi, double *x)
+static int num_int(ljgap__verr *e, const cJSON *it, const char *ptr, double lo, double hi, double *x)
 {
     if (!num(e, it, ptr, x)) return 0;
     if (*x != floor(*x) || *x < lo || *x > hi) {
-        ljgap_verr_add(e, ptr, "must be an integer from %.17g to %.17g (got %.17g)", lo, hi, *x);
+        ljgap__verr_add(e, ptr, "must be an integer from %.17g to %.17g (got %.17g)", lo, hi, *x);
         return 0;
     }
     return 1;
 }
 
 /* A JSON array of min..max entries at it; returns its size or 0 after recording why not. */
-static size_t array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+static size_t array_of(ljgap__verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                        const char *what)
 {
     if (!cJSON_IsArray(it)) {
-        ljgap_verr_add(e, ptr, "must be an array (%s)", what);
+        ljgap__verr_add(e, ptr, "must be an array (%s)", what);
         return 0;
     }
     size_t n = (size_t)cJSON_GetArraySize(it);
     if (n < min || n > max) {
-        ljgap_verr_add(e, ptr, "has %zu entries; give %zu to %zu (%s)", n, min, max, what);
+        ljgap__verr_add(e, ptr, "has %zu entries; give %zu to %zu (%s)", n, min, max, what);
         return 0;
     }
     return n;
@@ -218,16 +218,16 @@ static size_t array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t m
 
 /* Index of the string at it (pointer ptr) in names (NULL-terminated), or -1 after recording
  * why not; what lists the choices for the message, field names the thing chosen. */
-static int pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *const *names,
+static int pick(ljgap__verr *e, const cJSON *it, const char *ptr, const char *const *names,
                 const char *field, const char *what)
 {
     if (!cJSON_IsString(it)) {
-        ljgap_verr_add(e, ptr, "must be a string: %s", what);
+        ljgap__verr_add(e, ptr, "must be a string: %s", what);
         return -1;
     }
     for (int i = 0; names[i]; i++)
         if (strcmp(it->valuestring, names[i]) == 0) return i;
-    ljgap_verr_add(e, ptr, "unknown %s \"%.*s\": expected %s", field,
+    ljgap__verr_add(e, ptr, "unknown %s \"%.*s\": expected %s", field,
                    quote_len(it->valuestring, 40), it->valuestring, what);
     return -1;
 }
@@ -240,27 +240,27 @@ static const char *k0_why(void)
 
 /* A lower cut-off: positive, finite and, times chi (1, or χ in m when given in 1/m), above k0.
  * *k1 receives the dimensionless value. */
-static int check_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
+static int check_k1(ljgap__verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
 {
     double raw;
     if (!num_pos(e, it, ptr, &raw)) return 0;
     *k1 = raw * chi;
     if (*k1 > ljgap_k0()) return 1;
     if (chi == 1)
-        ljgap_verr_add(e, ptr, "k1 = %g is at or below k0 = %.5f: %s", *k1, ljgap_k0(), k0_why());
+        ljgap__verr_add(e, ptr, "k1 = %g is at or below k0 = %.5f: %s", *k1, ljgap_k0(), k0_why());
     else
-        ljgap_verr_add(e, ptr, "k1 = %g 1/m gives χk1 = %g (χ = %g m), at or below k0 = %.5f: %s",
+        ljgap__verr_add(e, ptr, "k1 = %g 1/m gives χk1 = %g (χ = %g m), at or below k0 = %.5f: %s",
                        raw, *k1, chi, ljgap_k0(), k0_why());
     return 0;
 }
 
 /* D (or 3 - H, when h is the given H) must lie in (2, 3). */
-static int check_D(ljgap_verr *e, const char *ptr, double D, const double *h)
+static int check_D(ljgap__verr *e, const char *ptr, double D, const double *h)
 {
     char given[80] = "";
     if (D > 2 && D < 3) return 1;
     if (h) snprintf(given, sizeof given, "H = %g gives ", *h);
-    ljgap_verr_add(e, ptr,
+    ljgap__verr_add(e, ptr,
                    "%sD = %g, outside (2, 3): the quasi-fractal PSD (6) needs 2 < D < 3 "
                    "(0 < H < 1)",
                    given, D);
@@ -269,11 +269,11 @@ static int check_D(ljgap_verr *e, const char *ptr, double D, const double *h)
 
 /* x within the range the solvers accept (ljgap.h), else a problem at ptr naming it: the core
  * would refuse it too, but could only point at "/psd". what names x in the message. */
-static int in_core_range(ljgap_verr *e, const char *ptr, const char *what, double x, double lo,
+static int in_core_range(ljgap__verr *e, const char *ptr, const char *what, double x, double lo,
                          double hi)
 {
     if (!(x >= lo && x <= hi)) {
-        ljgap_verr_add(e, ptr, "%s = %g is outside [%g, %g], the range this service computes", what,
+        ljgap__verr_add(e, ptr, "%s = %g is outside [%g, %g], the range this service computes", what,
                        x, lo, hi);
         return 0;
     }
@@ -281,7 +281,7 @@ static int in_core_range(ljgap_verr *e, const char *ptr, const char *what, doubl
 }
 
 /* Uniform range {"min","max","n"} at it (pointer base): 0 < min < max, n integer 2..nmax. */
-static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double nmax, double out[3])
+static int parse_range(ljgap__verr *e, const cJSON *it, const char *base, double nmax, double out[3])
 {
     char ptr[PTR_LEN];
     const cJSON *lo, *hi, *n;
@@ -295,7 +295,7 @@ static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double 
     snprintf(ptr, sizeof ptr, "%s/max", base);
     if (hi && num_pos(e, hi, ptr, &out[1])) {
         if (ok && !(out[1] > out[0])) {
-            ljgap_verr_add(e, ptr, "max = %g must be greater than min = %g", out[1], out[0]);
+            ljgap__verr_add(e, ptr, "max = %g must be greater than min = %g", out[1], out[0]);
             ok = 0;
         }
     } else {
@@ -307,19 +307,19 @@ static int parse_range(ljgap_verr *e, const cJSON *it, const char *base, double 
 }
 
 /* A Poisson ratio in (-1, 0.5] at obj[name] (pointer /material/name). */
-static int poisson(ljgap_verr *e, const cJSON *obj, const char *name, double *nu)
+static int poisson(ljgap__verr *e, const cJSON *obj, const char *name, double *nu)
 {
     char ptr[PTR_LEN];
     const cJSON *it = required(e, obj, "/material", name, "Poisson's ratio, -1 < ν <= 0.5");
     snprintf(ptr, sizeof ptr, "/material/%s", name);
     if (!it || !num(e, it, ptr, nu)) return 0;
     if (*nu > -1 && *nu <= 0.5) return 1;
-    ljgap_verr_add(e, ptr, "ν = %g is outside (-1, 0.5], where an isotropic solid is stable", *nu);
+    ljgap__verr_add(e, ptr, "ν = %g is outside (-1, 0.5], where an isotropic solid is stable", *nu);
     return 0;
 }
 
 /* A number in [lo, hi] at obj[name] (pointer /material/name), recording "missing" if absent. */
-static int positive(ljgap_verr *e, const cJSON *obj, const char *name, const char *what, double lo,
+static int positive(ljgap__verr *e, const cJSON *obj, const char *name, const char *what, double lo,
                     double hi, double *x)
 {
     char ptr[PTR_LEN];
@@ -329,7 +329,7 @@ static int positive(ljgap_verr *e, const cJSON *obj, const char *name, const cha
 }
 
 /* The material block (required when need): E* directly or from two bodies, Δγ, ε. */
-static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq)
+static void parse_material(ljgap__verr *e, const cJSON *root, int need, ljgap__request *rq)
 {
     static const char *const pair[] = {"E1", "nu1", "E2", "nu2"};
     const cJSON *m = member(root, "material"), *Es;
@@ -337,13 +337,13 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
     int ok = 1;
     if (!m) {
         if (need)
-            ljgap_verr_add(e, "/material",
+            ljgap__verr_add(e, "/material",
                            "missing required field \"material\" ({\"E_star\"} or {\"E1\", "
                            "\"nu1\", \"E2\", \"nu2\"}, with \"dgamma\" and \"epsilon\"; SI)");
         return;
     }
     if (!cJSON_IsObject(m)) {
-        ljgap_verr_add(e, "/material", "must be an object {\"E_star\", \"dgamma\", \"epsilon\"}");
+        ljgap__verr_add(e, "/material", "must be an object {\"E_star\", \"dgamma\", \"epsilon\"}");
         return;
     }
     only_fields(e, m, "/material", material_fields, NULL);
@@ -352,13 +352,13 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
             char ptr[PTR_LEN];
             if (!member(m, pair[i])) continue;
             snprintf(ptr, sizeof ptr, "/material/%s", pair[i]);
-            ljgap_verr_add(e, ptr, "give E_star or E1, nu1, E2, nu2, not both");
+            ljgap__verr_add(e, ptr, "give E_star or E1, nu1, E2, nu2, not both");
             ok = 0;
         }
         ok &= num_pos(e, Es, "/material/E_star", &E) &&
               in_core_range(e, "/material/E_star", "E_star", E, E_MIN, E_MAX);
     } else if (!member(m, "E1") && !member(m, "E2") && !member(m, "nu1") && !member(m, "nu2")) {
-        ljgap_verr_add(e, "/material/E_star",
+        ljgap__verr_add(e, "/material/E_star",
                        "missing the modulus: give E_star (Pa) or E1, nu1, E2, nu2 "
                        "(1/E* = (1-ν1²)/E1 + (1-ν2²)/E2)");
         ok = 0;
@@ -368,7 +368,7 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
         ok &= positive(e, m, "E2", "Young's modulus of body 2, Pa", E_MIN, E_MAX, &E2);
         ok &= poisson(e, m, "nu2", &nu2);
         if (ok && ljgap_units_E_star(E1, nu1, E2, nu2, &E) != LJGAP_OK) {
-            ljgap_verr_add(e, "/material",
+            ljgap__verr_add(e, "/material",
                            "E* = 1/((1-ν1²)/E1 + (1-ν2²)/E2) is not a finite "
                            "positive number");
             ok = 0;
@@ -383,7 +383,7 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
     if (ljgap_material_set(&rq->mat, E, dg, eps) != LJGAP_OK ||
         !(isfinite(ljgap_units_chi(&rq->mat)) && ljgap_units_chi(&rq->mat) > 0 &&
           isfinite(ljgap_units_sigma0(&rq->mat)) && ljgap_units_sigma0(&rq->mat) > 0)) {
-        ljgap_verr_add(e, "/material",
+        ljgap__verr_add(e, "/material",
                        "the scales χ = 3ε²E* /(16Δγ) and σ0 = 16Δγ/(9√3ε) "
                        "are not finite positive numbers");
         return;
@@ -392,7 +392,7 @@ static void parse_material(ljgap_verr *e, const cJSON *root, int need, ljgap_req
 }
 
 /* "units": absent or "dimensionless" (0), "SI" (1, needs material), -1 after a problem. */
-static int parse_units(ljgap_verr *e, const cJSON *root)
+static int parse_units(ljgap__verr *e, const cJSON *root)
 {
     static const char *const names[] = {"dimensionless", "SI", NULL};
     const cJSON *u = member(root, "units");
@@ -400,7 +400,7 @@ static int parse_units(ljgap_verr *e, const cJSON *root)
     if (!u) return 0;
     i = pick(e, u, "/units", names, "units", "\"SI\" or \"dimensionless\"");
     if (i == 1 && !member(root, "material")) {
-        ljgap_verr_add(e, "/units",
+        ljgap__verr_add(e, "/units",
                        "\"units\":\"SI\" needs a \"material\" block (E*, Δγ, ε "
                        "set the scales)");
         return -1;
@@ -408,8 +408,8 @@ static int parse_units(ljgap_verr *e, const cJSON *root)
     return i;
 }
 
-static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
-                         ljgap_request *rq)
+static void parse_common(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim,
+                         ljgap__request *rq)
 {
     static const char *const names[] = {"pde", "paper", "montecarlo", NULL};
     static const ljgap_method methods[] = {LJGAP_METHOD_PDE, LJGAP_METHOD_PAPER, LJGAP_METHOD_MC};
@@ -424,26 +424,26 @@ static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *l
         if (x > 0 && x <= 0.1)
             rq->opts.tol = x;
         else
-            ljgap_verr_add(e, "/tol", "tol = %g is outside (0, 0.1]", x);
+            ljgap__verr_add(e, "/tol", "tol = %g is outside (0, 0.1]", x);
     }
     if ((it = member(root, "vmax")) && num(e, it, "/vmax", &x)) {
         if (x > 0 && x <= 1)
             rq->opts.vmax = x;
         else
-            ljgap_verr_add(e, "/vmax", "vmax = %g is outside (0, 1]", x);
+            ljgap__verr_add(e, "/vmax", "vmax = %g is outside (0, 1]", x);
         if (rq->opts.method != LJGAP_METHOD_PAPER)
             ljgap_warn(&rq->warn, "vmax is used by method \"paper\" only and was ignored");
     }
     rq->input_error = 1;
     if ((it = member(root, "input_error"))) {
         if (!cJSON_IsBool(it))
-            ljgap_verr_add(e, "/input_error", "input_error must be true or false");
+            ljgap__verr_add(e, "/input_error", "input_error must be true or false");
         else
             rq->input_error = cJSON_IsTrue(it);
     }
     if ((it = member(root, "fixed_vmax"))) {
         if (!cJSON_IsBool(it))
-            ljgap_verr_add(e, "/fixed_vmax", "fixed_vmax must be true or false");
+            ljgap__verr_add(e, "/fixed_vmax", "fixed_vmax must be true or false");
         else if ((rq->opts.fixed_vmax = cJSON_IsTrue(it)) && rq->opts.method != LJGAP_METHOD_PAPER)
             ljgap_warn(&rq->warn, "fixed_vmax is used by method \"paper\" only and was ignored");
     }
@@ -463,8 +463,8 @@ static void parse_common(ljgap_verr *e, const cJSON *root, const ljgap_limits *l
 
 /* A JSON array of 1..lim->max_points entries at it into a new rq->x (values read later);
  * returns the number of entries, 0 after recording why not. */
-static size_t points(ljgap_verr *e, const cJSON *it, const char *ptr, const ljgap_limits *lim,
-                     const char *what, ljgap_request *rq)
+static size_t points(ljgap__verr *e, const cJSON *it, const char *ptr, const ljgap__limits *lim,
+                     const char *what, ljgap__request *rq)
 {
     size_t n = array_of(e, it, ptr, 1, (size_t)lim->max_points, what);
     if (!n) return 0;
@@ -476,8 +476,8 @@ static size_t points(ljgap_verr *e, const cJSON *it, const char *ptr, const ljga
     return n;
 }
 
-static void parse_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
-                           ljgap_request *rq)
+static void parse_traction(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim,
+                           ljgap__request *rq)
 {
     const cJSON *g = required(e, root, "", "g_ave", "{\"min\",\"max\",\"n\"} or an array");
     double r[3];
@@ -507,11 +507,11 @@ static void parse_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits 
             i++;
         }
     } else {
-        ljgap_verr_add(e, "/g_ave", "must be {\"min\",\"max\",\"n\"} or an array of mean gaps");
+        ljgap__verr_add(e, "/g_ave", "must be {\"min\",\"max\",\"n\"} or an array of mean gaps");
     }
 }
 
-static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq)
+static void parse_pdf(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim, ljgap__request *rq)
 {
     const cJSON *g = required(e, root, "", "g_ave", "the mean gap");
     const cJSON *k2 = required(e, root, "", "k2", "snapshot cut-offs, null for ∞");
@@ -523,7 +523,7 @@ static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
     if (g && num_pos(e, g, "/g_ave", &rq->g_ave))
         in_core_range(e, "/g_ave", "g_ave", rq->g_ave, LJGAP_G_MIN, LJGAP_G_MAX);
     if (grid && !cJSON_IsObject(grid))
-        ljgap_verr_add(e, "/grid", "must be an object {\"min\",\"max\",\"n\"}");
+        ljgap__verr_add(e, "/grid", "must be an object {\"min\",\"max\",\"n\"}");
     else if (grid)
         rq->has_grid = parse_range(e, grid, "/grid", (double)lim->max_points, rq->grid);
     if (!k2 || !points(e, k2, "/k2", lim, "snapshot cut-offs", rq)) return;
@@ -541,21 +541,21 @@ static void parse_pdf(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
         rq->x[i] = INFINITY;
         if (cJSON_IsNull(it)) {
             if (k1_known && !infinite)
-                ljgap_verr_add(e, ptr,
+                ljgap__verr_add(e, ptr,
                                "null (∞) needs a PSD with infinite support (power law "
                                "without k2, or a table with a tail)");
         } else if (num_pos(e, it, ptr, &rq->x[i]) && k1_known && !(rq->x[i] > k1)) {
-            ljgap_verr_add(e, ptr, "k2 = %g must be greater than the PSD's k1 = %g", rq->x[i], k1);
+            ljgap__verr_add(e, ptr, "k2 = %g must be greater than the PSD's k1 = %g", rq->x[i], k1);
         }
         i++;
     }
 }
 
-static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
-                        ljgap_request *rq)
+static void parse_sweep(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim,
+                        ljgap__request *rq)
 {
     static const char *const names[] = {"m0", "C", "D", "k1", "k2", NULL};
-    static const ljgap_vary varies[] = {LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1,
+    static const ljgap__vary varies[] = {LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1,
                                         LJGAP_VARY_K2};
     const cJSON *v = required(e, root, "", "vary", "\"m0\", \"C\", \"D\", \"k1\" or \"k2\"");
     const cJSON *vals = required(e, root, "", "values", "the values of the varied field");
@@ -568,7 +568,7 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
           : -1;
     int vary_ok = k >= 0;
     if (rq->psd.kind == LJGAP_PSD_TABLE)
-        ljgap_verr_add(e, "/psd/kind", "a sweep varies a power-law PSD: kind must be \"power\"");
+        ljgap__verr_add(e, "/psd/kind", "a sweep varies a power-law PSD: kind must be \"power\"");
     if (vary_ok) {
         rq->vary = varies[k];
         rq->vary_name = names[k];
@@ -583,15 +583,15 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
         } else if (rq->vary == LJGAP_VARY_D) {
             if (num(e, it, ptr, x)) check_D(e, ptr, *x, NULL);
         } else if (rq->vary == LJGAP_VARY_K1) {
-            /* x keeps the value as given; ljgap_request_sweep_spec converts it */
+            /* x keeps the value as given; ljgap__request_sweep_spec converts it */
             if (check_k1(e, it, ptr, chi, &kt) && (*x = it->valuedouble, 1) && !isnan(rq->psd.k2) &&
                 !(kt < rq->psd.k2))
-                ljgap_verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x,
+                ljgap__verr_add(e, ptr, "k1 = %g must be below the PSD's k2 = %g", *x,
                                rq->psd.k2 / chi);
         } else if (rq->vary == LJGAP_VARY_K2) {
             /* the unknown short-wavelength end: k2 in the PSD's units, above k1 */
             if (num_pos(e, it, ptr, x) && isfinite(rq->psd.k1) && !(*x * chi > rq->psd.k1))
-                ljgap_verr_add(e, ptr, "k2 = %g must be above the PSD's k1 = %g", *x,
+                ljgap__verr_add(e, ptr, "k2 = %g must be above the PSD's k1 = %g", *x,
                                rq->psd.k1 / chi);
             else if (*x > 0)
                 in_core_range(e, ptr, "k2 (in units of 1/χ)", *x * chi, 0, LJGAP_K_MAX);
@@ -604,8 +604,8 @@ static void parse_sweep(ljgap_verr *e, const cJSON *root, const ljgap_limits *li
     }
 }
 
-int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
-                        ljgap_request *rq, ljgap_verr *e)
+int ljgap__request_parse(ljgap__endpoint ep, const cJSON *root, const ljgap__limits *lim,
+                        ljgap__request *rq, ljgap__verr *e)
 {
     static const char *const *const extra[] = {NULL,         traction_fields, pdf_fields,
                                                sweep_fields, contact_fields,  NULL};
@@ -618,22 +618,22 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     rq->psd.k1 = rq->psd.k2 = NAN; /* unknown until read */
     rq->psd.kind = (ljgap_psd_kind)-1;
     if (!cJSON_IsObject(root)) {
-        ljgap_verr_add(e, "", "the request body must be a JSON object");
+        ljgap__verr_add(e, "", "the request body must be a JSON object");
         return e->n;
     }
     if (ep == LJGAP_EP_SIMULATION) {
         rq->method = "numerical";
         only_fields(e, root, "", sim_fields, NULL);
-        ljgap_request_parse_psd_spec(e, root, NULL, &rq->psd);
-        ljgap_request_parse_simulation(e, root, lim, rq);
+        ljgap__request_parse_psd_spec(e, root, NULL, &rq->psd);
+        ljgap__request_parse_simulation(e, root, lim, rq);
         return e->n;
     }
     if (ep == LJGAP_EP_PSD) {
-        ljgap_request_parse_psd(e, root, lim, 0, rq);
+        ljgap__request_parse_psd(e, root, lim, 0, rq);
         return e->n;
     }
     if (ep == LJGAP_EP_COMBINE) {
-        ljgap_combine_parse(e, root, rq);
+        ljgap__combine_parse(e, root, rq);
         parse_material(e, root, 0, rq); /* optional: the theory's domain, as /v1/psd */
         return e->n;
     }
@@ -644,7 +644,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     /* an SI psd cannot be checked without a valid material: its problems come first */
     if (si == 0 || (si == 1 && rq->has_material)) {
         rq->si_psd = si;
-        ljgap_request_parse_psd_spec(e, root, si ? &rq->mat : NULL, &rq->psd);
+        ljgap__request_parse_psd_spec(e, root, si ? &rq->mat : NULL, &rq->psd);
     }
     switch (ep) {
     case LJGAP_EP_ADHESION:
@@ -670,7 +670,7 @@ int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits
     return e->n;
 }
 
-void ljgap_request_free(ljgap_request *rq)
+void ljgap__request_free(ljgap__request *rq)
 {
     if (!rq) return;
     free(rq->psd.k);
@@ -681,13 +681,13 @@ void ljgap_request_free(ljgap_request *rq)
     free(rq->x);
     free(rq->topo.h);
     rq->psd.k = rq->psd.P = rq->psd.P_err = rq->x = rq->topo.h = NULL;
-    ljgap_combine_spec_free(rq->combine);
+    ljgap__combine_spec_free(rq->combine);
     rq->combine = NULL;
     cJSON_Delete(rq->source);
     rq->source = NULL;
 }
 
-int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)
+int ljgap__psd_from_spec(ljgap_psd *psd, const ljgap__psd_spec *s)
 {
     if (s->kind == LJGAP_PSD_TABLE)
         return ljgap_psd_table(psd, s->k, s->P, s->n, s->has_tail, s->tail_q);
@@ -697,7 +697,7 @@ int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s)
     return ljgap_psd_power(psd, s->D, s->k1, s->k2, s->level, s->level_val);
 }
 
-void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec)
+void ljgap__request_sweep_spec(const ljgap__request *rq, size_t i, ljgap__psd_spec *spec)
 {
     const ljgap_material *mat = rq->si_psd ? &rq->mat : NULL;
     double x = rq->x[i];
@@ -726,84 +726,84 @@ void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec 
 
 /* ---- the validators, for requests parsed in their own files (request.h) ---- */
 
-void ljgap_v_only_fields(ljgap_verr *e, const cJSON *obj, const char *base,
+void ljgap__v_only_fields(ljgap__verr *e, const cJSON *obj, const char *base,
                          const char *const *names)
 {
     only_fields(e, obj, base, names, NULL);
 }
 
-const cJSON *ljgap_v_required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+const cJSON *ljgap__v_required(ljgap__verr *e, const cJSON *obj, const char *base, const char *name,
                               const char *what)
 {
     return required(e, obj, base, name, what);
 }
 
-int ljgap_v_num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+int ljgap__v_num(ljgap__verr *e, const cJSON *it, const char *ptr, double *x)
 {
     return num(e, it, ptr, x);
 }
 
-size_t ljgap_v_array(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+size_t ljgap__v_array(ljgap__verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                      const char *what)
 {
     return array_of(e, it, ptr, min, max, what);
 }
 
-const cJSON *ljgap_v_member(const cJSON *obj, const char *name)
+const cJSON *ljgap__v_member(const cJSON *obj, const char *name)
 {
     return member(obj, name);
 }
 
-int ljgap_v_num_pos(ljgap_verr *e, const cJSON *it, const char *ptr, double *x)
+int ljgap__v_num_pos(ljgap__verr *e, const cJSON *it, const char *ptr, double *x)
 {
     return num_pos(e, it, ptr, x);
 }
 
-int ljgap_v_in_core_range(ljgap_verr *e, const char *ptr, const char *what, double x, double lo,
+int ljgap__v_in_core_range(ljgap__verr *e, const char *ptr, const char *what, double x, double lo,
                           double hi)
 {
     return in_core_range(e, ptr, what, x, lo, hi);
 }
 
-int ljgap_v_pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *const *names,
+int ljgap__v_pick(ljgap__verr *e, const cJSON *it, const char *ptr, const char *const *names,
                  const char *field, const char *what)
 {
     return pick(e, it, ptr, names, field, what);
 }
 
-void ljgap_v_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq)
+void ljgap__v_material(ljgap__verr *e, const cJSON *root, int need, ljgap__request *rq)
 {
     parse_material(e, root, need, rq);
 }
 
-size_t ljgap_v_array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+size_t ljgap__v_array_of(ljgap__verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                         const char *what)
 {
     return array_of(e, it, ptr, min, max, what);
 }
 
-int ljgap_v_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
+int ljgap__v_k1(ljgap__verr *e, const cJSON *it, const char *ptr, double chi, double *k1)
 {
     return check_k1(e, it, ptr, chi, k1);
 }
 
-const char *ljgap_v_k0_why(void)
+const char *ljgap__v_k0_why(void)
 {
     return k0_why();
 }
 
-int ljgap_v_D(ljgap_verr *e, const char *ptr, double D, const double *h)
+int ljgap__v_D(ljgap__verr *e, const char *ptr, double D, const double *h)
 {
     return check_D(e, ptr, D, h);
 }
 
-int ljgap_v_num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi,
+int ljgap__v_num_int(ljgap__verr *e, const cJSON *it, const char *ptr, double lo, double hi,
                     double *x)
 {
     return num_int(e, it, ptr, lo, hi, x);
 }
 
-void ljgap_v_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq)
+void ljgap__v_traction(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim, ljgap__request *rq)
 {
     parse_traction(e, root, lim, rq);
 }

@@ -1,6 +1,6 @@
 /* request.h -- a compute request (docs/api.md), validated and in core terms.
  *
- * ljgap_request_parse reads a cJSON request body for one endpoint, checks every field
+ * ljgap__request_parse reads a cJSON request body for one endpoint, checks every field
  * against the contract and collects ALL the problems it finds as {"pointer","detail"}
  * entries (RFC 6901 pointers into the request), so that one 422 answer tells the caller
  * everything that is wrong. A request that passes has every number the core needs, with
@@ -30,10 +30,10 @@ typedef enum {
     LJGAP_EP_SIMULATION, /* a numerical-model job (ljgap_sim.h), not a synchronous endpoint */
     LJGAP_EP_PSD,        /* the PSD of a height map (ljgap_topo.h); its text form too */
     LJGAP_EP_COMBINE     /* several measured PSDs as one (ljgap_combine.h, combine.c) */
-} ljgap_endpoint;
+} ljgap__endpoint;
 
 /* Which PSD field a sweep varies. */
-typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1, LJGAP_VARY_K2 } ljgap_vary;
+typedef enum { LJGAP_VARY_M0, LJGAP_VARY_C, LJGAP_VARY_D, LJGAP_VARY_K1, LJGAP_VARY_K2 } ljgap__vary;
 
 /* The psd object as given (not yet built: a sweep builds one PSD per value). */
 typedef struct {
@@ -58,7 +58,7 @@ typedef struct {
     int c_si;           /* power: level C is in SI (m^(2D-4)); converted with D and mat when
                          * the PSD is built (a sweep over D changes the conversion) */
     ljgap_material mat; /* the material, when c_si */
-} ljgap_psd_spec;
+} ljgap__psd_spec;
 
 /* A height map as given (psd: the JSON topography object, or a text upload and its query). */
 typedef struct {
@@ -73,21 +73,21 @@ typedef struct {
     double resolution; /* m, 0 when not given */
     double fit_kmin;   /* the fit band's ends (1/m), 0 when not given */
     double fit_kmax;
-} ljgap_topo_spec;
+} ljgap__topo_spec;
 
 typedef struct {
-    ljgap_endpoint ep;
+    ljgap__endpoint ep;
     ljgap_opts opts;       /* method, tol, vmax, samples, seed (limits set by the handler) */
     const char *method;    /* contract name of opts.method (static string) */
-    ljgap_psd_spec psd;    /* the psd object */
+    ljgap__psd_spec psd;    /* the psd object */
     double *x;             /* owned: traction and simulation g_ave points, pdf k2 cut-offs
                             * (INFINITY for null), or sweep values (as given: SI when si_psd;
-                            * see ljgap_request_sweep_spec) */
+                            * see ljgap__request_sweep_spec) */
     size_t nx;             /* entries in x */
     double g_ave;          /* pdf: the mean gap */
     int has_grid;          /* pdf: grid given */
     double grid[3];        /* pdf: {min, max, n} */
-    ljgap_vary vary;       /* sweep: which field */
+    ljgap__vary vary;       /* sweep: which field */
     const char *vary_name; /* sweep: its contract name (static string) */
     int has_material;      /* a material block was given: answers add "si" */
     ljgap_material mat;    /* the material (SI), when has_material */
@@ -97,95 +97,95 @@ typedef struct {
                             * extrapolated) when the PSD has one: 1 unless "input_error": false */
     ljgap_sim_opts sim;    /* simulation: n, L, realizations, seed, tol (the core's defaults
                             * for what is not given); g_ave points in x */
-    ljgap_topo_spec topo;  /* psd: the height map */
+    ljgap__topo_spec topo;  /* psd: the height map */
     ljgap_warnings warn;   /* notes on the request itself (e.g. ignored fields) */
-    struct ljgap_combine_spec *combine; /* psd/combine: the PSDs (owned, combine.c) */
+    struct ljgap__combine_spec *combine; /* psd/combine: the PSDs (owned, combine.c) */
     cJSON *source;         /* psd of an instrument file: the answer's "source" (owned; psd.c
                             * moves it into the answer), else NULL */
-} ljgap_request;
+} ljgap__request;
 
 /* Collected validation problems. */
 typedef struct {
     cJSON *errors; /* array of {"pointer","detail"}, at most LJGAP_MAX_ERRORS kept */
     int n;         /* problems found (may exceed the number kept) */
     int oom;       /* an allocation failed while recording */
-} ljgap_verr;
+} ljgap__verr;
 
 #define LJGAP_MAX_ERRORS 100
 
 /* Validates root (any JSON value) as a request to ep. Returns 0 when it is valid; else the
  * number of problems, each recorded in e (whose errors array must exist). rq is always left
- * in a state ljgap_request_free accepts. */
-int ljgap_request_parse(ljgap_endpoint ep, const cJSON *root, const ljgap_limits *lim,
-                        ljgap_request *rq, ljgap_verr *e);
-void ljgap_request_free(ljgap_request *rq);
+ * in a state ljgap__request_free accepts. */
+int ljgap__request_parse(ljgap__endpoint ep, const cJSON *root, const ljgap__limits *lim,
+                        ljgap__request *rq, ljgap__verr *e);
+void ljgap__request_free(ljgap__request *rq);
 /* The same for a text upload to psd: root holds the query as {"topography": {dx, dy,
- * periodic}, "material": {...}} (ljgap_topo_params_json) and heights the parsed matrix, which
+ * periodic}, "material": {...}} (ljgap__topo_params_json) and heights the parsed matrix, which
  * rq takes over (heights is left empty). Problems already in e (the text's) stay first. */
-int ljgap_request_parse_text(const cJSON *root, ljgap_topo_spec *heights, const ljgap_limits *lim,
-                             ljgap_request *rq, ljgap_verr *e);
+int ljgap__request_parse_text(const cJSON *root, ljgap__topo_spec *heights, const ljgap__limits *lim,
+                             ljgap__request *rq, ljgap__verr *e);
 
 /* Builds the PSD a spec describes (ljgap_psd_power / ljgap_psd_table status). */
-int ljgap_psd_from_spec(ljgap_psd *psd, const ljgap_psd_spec *s);
+int ljgap__psd_from_spec(ljgap_psd *psd, const ljgap__psd_spec *s);
 /* The PSD spec of sweep value i (rq->x[i] placed in the varied field, in core units). */
-void ljgap_request_sweep_spec(const ljgap_request *rq, size_t i, ljgap_psd_spec *spec);
+void ljgap__request_sweep_spec(const ljgap__request *rq, size_t i, ljgap__psd_spec *spec);
 
 /* Records one problem at pointer ptr (printf-style detail). */
-void ljgap_verr_add(ljgap_verr *e, const char *ptr, const char *fmt, ...)
+void ljgap__verr_add(ljgap__verr *e, const char *ptr, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
 /* ---- the validators above, for requests parsed in their own files (combine.c) ----
  * Each records its problems in e as the request's own parsers do. */
 /* Every member of obj (pointer base) must be named in names (NULL-terminated), once. */
-void ljgap_v_only_fields(ljgap_verr *e, const cJSON *obj, const char *base,
+void ljgap__v_only_fields(ljgap__verr *e, const cJSON *obj, const char *base,
                          const char *const *names);
 /* obj[name], recording "missing" at base/name (what: what the field is) when absent. */
-const cJSON *ljgap_v_required(ljgap_verr *e, const cJSON *obj, const char *base, const char *name,
+const cJSON *ljgap__v_required(ljgap__verr *e, const cJSON *obj, const char *base, const char *name,
                               const char *what);
 /* A finite JSON number at it (pointer ptr) into *x; 0 after recording why not. */
-int ljgap_v_num(ljgap_verr *e, const cJSON *it, const char *ptr, double *x);
+int ljgap__v_num(ljgap__verr *e, const cJSON *it, const char *ptr, double *x);
 /* A JSON array of min..max entries; its size, or 0 after recording why not. */
-size_t ljgap_v_array(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+size_t ljgap__v_array(ljgap__verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                      const char *what);
 /* obj[name], or NULL. */
-const cJSON *ljgap_v_member(const cJSON *obj, const char *name);
+const cJSON *ljgap__v_member(const cJSON *obj, const char *name);
 /* A finite positive JSON number at it into *x; 0 after recording why not. */
-int ljgap_v_num_pos(ljgap_verr *e, const cJSON *it, const char *ptr, double *x);
+int ljgap__v_num_pos(ljgap__verr *e, const cJSON *it, const char *ptr, double *x);
 /* Is x (what, at ptr) within [lo, hi], the range the core handles? 0 after recording why not. */
-int ljgap_v_in_core_range(ljgap_verr *e, const char *ptr, const char *what, double x, double lo,
+int ljgap__v_in_core_range(ljgap__verr *e, const char *ptr, const char *what, double x, double lo,
                           double hi);
 /* The index in names (NULL-terminated) of the string at it, or -1 after recording why not. */
-int ljgap_v_pick(ljgap_verr *e, const cJSON *it, const char *ptr, const char *const *names,
+int ljgap__v_pick(ljgap__verr *e, const cJSON *it, const char *ptr, const char *const *names,
                  const char *field, const char *what);
 /* The request's material block into rq (need: it must be there). */
-void ljgap_v_material(ljgap_verr *e, const cJSON *root, int need, ljgap_request *rq);
+void ljgap__v_material(ljgap__verr *e, const cJSON *root, int need, ljgap__request *rq);
 /* A JSON array of min..max entries at it (what it should hold); its size, or 0. */
-size_t ljgap_v_array_of(ljgap_verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
+size_t ljgap__v_array_of(ljgap__verr *e, const cJSON *it, const char *ptr, size_t min, size_t max,
                         const char *what);
 /* k1 at it, k0 < chi k1 checked (chi 1: dimensionless); 0 after recording why not. */
-int ljgap_v_k1(ljgap_verr *e, const cJSON *it, const char *ptr, double chi, double *k1);
+int ljgap__v_k1(ljgap__verr *e, const cJSON *it, const char *ptr, double chi, double *k1);
 /* 2 < D < 3 (h: the Hurst exponent it came from, or NULL); 0 after recording why not. */
-int ljgap_v_D(ljgap_verr *e, const char *ptr, double D, const double *h);
+int ljgap__v_D(ljgap__verr *e, const char *ptr, double D, const double *h);
 /* Why k1 must be above k0, for the details. */
-const char *ljgap_v_k0_why(void);
+const char *ljgap__v_k0_why(void);
 /* An integer JSON number in [lo, hi] at it into *x; 0 after recording why not. */
-int ljgap_v_num_int(ljgap_verr *e, const cJSON *it, const char *ptr, double lo, double hi,
+int ljgap__v_num_int(ljgap__verr *e, const cJSON *it, const char *ptr, double lo, double hi,
                     double *x);
 /* traction's g_ave (a list or a range) into rq. */
-void ljgap_v_traction(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, ljgap_request *rq);
+void ljgap__v_traction(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim, ljgap__request *rq);
 /* request_sim.c: a simulation request's own fields into rq (its psd already read). */
-void ljgap_request_parse_simulation(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim,
-                                    ljgap_request *rq);
+void ljgap__request_parse_simulation(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim,
+                                    ljgap__request *rq);
 /* request_psd.c: root's psd object into s (SI with mat, else dimensionless). */
-void ljgap_request_parse_psd_spec(ljgap_verr *e, const cJSON *root, const ljgap_material *mat,
-                                  ljgap_psd_spec *s);
+void ljgap__request_parse_psd_spec(ljgap__verr *e, const cJSON *root, const ljgap_material *mat,
+                                  ljgap__psd_spec *s);
 /* request_topo.c: a psd request (text: the matrix came as text, already in rq->topo). */
-void ljgap_request_parse_psd(ljgap_verr *e, const cJSON *root, const ljgap_limits *lim, int text,
-                             ljgap_request *rq);
+void ljgap__request_parse_psd(ljgap__verr *e, const cJSON *root, const ljgap__limits *lim, int text,
+                             ljgap__request *rq);
 
 /* ---- combine.c: POST /v1/psd/combine ---- */
 /* Validates root's {"psds": [...], "points_per_decade"} into rq->combine. */
-void ljgap_combine_parse(ljgap_verr *e, const cJSON *root, ljgap_request *rq);
-void ljgap_combine_spec_free(struct ljgap_combine_spec *s); /* NULL is fine */
+void ljgap__combine_parse(ljgap__verr *e, const cJSON *root, ljgap__request *rq);
+void ljgap__combine_spec_free(struct ljgap__combine_spec *s); /* NULL is fine */
 
 #endif

@@ -19,13 +19,13 @@ typedef struct {
                            * LJGAP_TOPO_POINTS_DEFAULT) */
     long sim_threads;     /* threads of one simulation run, each computing realizations (<= 0:
                            * the online cores); results do not depend on it. The handler starts
-                           * with 0 (the CLI's foreground run takes every core); ljgap_limits_default
+                           * with 0 (the CLI's foreground run takes every core); ljgap__limits_default
                            * gives 1 (a daemon's jobs, --job-workers of them at once, leave the
                            * other cores to the synchronous endpoints) */
     const volatile int *cancel; /* set nonzero to abort computations (shutdown) */
-} ljgap_limits;
+} ljgap__limits;
 
-/* The handler's limits before ljgap_handler_set_limits: sweeps and simulations on every core. A
+/* The handler's limits before ljgap__handler_set_limits: sweeps and simulations on every core. A
  * macro, not a const object: C needs a constant expression to initialise a static. */
 #define LJGAP_LIMITS_INIT                                                                          \
     {                                                                                              \
@@ -34,15 +34,15 @@ typedef struct {
     }
 
 /* The daemon's defaults: those, with the online cores for a sweep and 1 thread a simulation. */
-void ljgap_limits_default(ljgap_limits *l);
-/* The limits used by ljgap_handle (defaults until set). Not thread-safe: call at start-up. */
-void ljgap_handler_set_limits(const ljgap_limits *l);
+void ljgap__limits_default(ljgap__limits *l);
+/* The limits used by ljgap__handle (defaults until set). Not thread-safe: call at start-up. */
+void ljgap__handler_set_limits(const ljgap__limits *l);
 
 #define LJGAP_TOPO_POINTS_DEFAULT (1L << 23) /* 8 Mi heights: a 2896² map, 64 MiB of doubles */
 
 /* The cap on the heights of one psd map: max_topo_points, or LJGAP_TOPO_POINTS_DEFAULT when that
  * is <= 0. */
-size_t ljgap_limits_topo_cap(const ljgap_limits *l);
+size_t ljgap__limits_topo_cap(const ljgap__limits *l);
 
 /* How one call is driven, beyond the server-wide limits. Everything may be zero. */
 typedef struct {
@@ -53,15 +53,15 @@ typedef struct {
                                  * prefers that to application/json (accept.h); one that allows
                                  * no form the endpoint has is a 406 problem, decided before the
                                  * body is read. Problems are always application/problem+json. */
-} ljgap_call;
+} ljgap__call;
 
-/* A text upload's query parameter (handler.h: ljgap_handle_text). Bodies up to
+/* A text upload's query parameter (handler.h: ljgap__handle_text). Bodies up to
  * LJGAP_TEXT_MAX_BYTES are meant (the daemon enforces it). */
 #define LJGAP_TEXT_MAX_BYTES ((size_t)64 << 20)
 
 typedef struct {
     const char *name;  /* query parameter name, decoded */
     const char *value; /* its value, decoded; NULL or "" when given without one */
-} ljgap_param;
+} ljgap__param;
 
 #endif

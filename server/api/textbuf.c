@@ -7,7 +7,7 @@
 #include <string.h>
 
 /* Makes room for n more bytes and the NUL; 0 on failure (then b->oom is set). */
-static int reserve(ljgap_textbuf *b, size_t n)
+static int reserve(ljgap__textbuf *b, size_t n)
 {
     size_t cap = b->cap ? b->cap : 256;
     char *s;
@@ -27,7 +27,7 @@ static int reserve(ljgap_textbuf *b, size_t n)
     return 1;
 }
 
-void ljgap_textbuf_put(ljgap_textbuf *b, const char *s, size_t n)
+void ljgap__textbuf_put(ljgap__textbuf *b, const char *s, size_t n)
 {
     if (!reserve(b, n)) return;
     memcpy(b->s + b->len, s, n);
@@ -35,7 +35,7 @@ void ljgap_textbuf_put(ljgap_textbuf *b, const char *s, size_t n)
     b->s[b->len] = '\0';
 }
 
-void ljgap_textbuf_printf(ljgap_textbuf *b, const char *fmt, ...)
+void ljgap__textbuf_printf(ljgap__textbuf *b, const char *fmt, ...)
 {
     va_list ap;
     int n;
@@ -49,7 +49,7 @@ void ljgap_textbuf_printf(ljgap_textbuf *b, const char *fmt, ...)
     b->len += (size_t)n;
 }
 
-size_t ljgap_utf8_span(const char *s, size_t n)
+size_t ljgap__utf8_span(const char *s, size_t n)
 {
     const unsigned char *u = (const unsigned char *)s;
     size_t i = 0;

@@ -23,7 +23,7 @@
  * JSON agree bit for bit); the matrix grows by doubling (bench/topo.sh times a 2048² map).
  */
 #include "topo_text.h"
-#include "textbuf.h" /* ljgap_utf8_span */
+#include "textbuf.h" /* ljgap__utf8_span */
 
 #include <math.h>
 #include <stdint.h>
@@ -134,8 +134,8 @@ static const char *read_value(const char *s, size_t n, double *x)
     return NULL;
 }
 
-void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljgap_topo_spec *t,
-                           ljgap_verr *e)
+void ljgap__topo_text_parse(const char *body, size_t len, size_t max_points, ljgap__topo_spec *t,
+                           ljgap__verr *e)
 {
     const char *p = body, *end = body + len;
     values v = {0};
@@ -163,7 +163,7 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
             if (*p == ',') {
                 if (last != 1) {
                     snprintf(ptr, sizeof ptr, "/topography/heights/%zu/%zu", rows, cols);
-                    ljgap_verr_add(e, ptr,
+                    ljgap__verr_add(e, ptr,
                                    "line %zu, column %zu: an empty value before this comma "
                                    "(values are separated by white space or one comma)",
                                    line, (size_t)(p - ls) + 1);
@@ -181,12 +181,12 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
             if (why) {
                 quote(q, s, (size_t)(p - s));
                 snprintf(ptr, sizeof ptr, "/topography/heights/%zu/%zu", rows, cols);
-                ljgap_verr_add(e, ptr, "line %zu, column %zu: \"%s\" %s", line,
+                ljgap__verr_add(e, ptr, "line %zu, column %zu: \"%s\" %s", line,
                                (size_t)(s - ls) + 1, q, why);
                 bad++;
             }
             if (v.n >= max_points) {
-                ljgap_verr_add(e, "/topography/heights",
+                ljgap__verr_add(e, "/topography/heights",
                                "more than %zu heights (line %zu): the cap of this server",
                                max_points, line);
                 bad++;
@@ -201,7 +201,7 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
         }
         if (last == 2) {
             snprintf(ptr, sizeof ptr, "/topography/heights/%zu/%zu", rows, cols);
-            ljgap_verr_add(e, ptr,
+            ljgap__verr_add(e, ptr,
                            "line %zu, column %zu: the line ends with a comma: a value is "
                            "missing",
                            line, (size_t)(p - ls));
@@ -213,7 +213,7 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
                 first_line = line;
             } else if (cols != nx) {
                 snprintf(ptr, sizeof ptr, "/topography/heights/%zu", rows);
-                ljgap_verr_add(e, ptr,
+                ljgap__verr_add(e, ptr,
                                "line %zu has %zu values, the first row (line %zu) has %zu: every "
                                "row needs as many (a ragged matrix)",
                                line, cols, first_line, nx);
@@ -225,7 +225,7 @@ void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljga
     }
 done:
     if (!bad && !e->oom && !v.n)
-        ljgap_verr_add(e, "/topography/heights",
+        ljgap__verr_add(e, "/topography/heights",
                        "no heights: the body holds no numbers (one row of the map a line, "
                        "values in m separated by spaces or commas)");
     if (bad || e->oom || !v.n) {
@@ -243,7 +243,7 @@ static void param_pointer(char *ptr, size_t size, const char *name, int where)
     static const char *const base[] = {"", "/topography", "/material", "/fit"};
     size_t k = (size_t)snprintf(ptr, size, "%s/", base[where]);
     /* RFC 6901 escapes; the name cut at whole UTF-8 characters (the pointer goes out as JSON) */
-    size_t n = ljgap_utf8_span(name, strnlen(name, 60));
+    size_t n = ljgap__utf8_span(name, strnlen(name, 60));
     for (size_t i = 0; i < n && k + 3 < size; i++) {
         if (name[i] == '~' || name[i] == '/')
             ptr[k++] = '~', ptr[k++] = name[i] == '~' ? '0' : '1';
@@ -253,7 +253,7 @@ static void param_pointer(char *ptr, size_t size, const char *name, int where)
     ptr[k] = '\0';
 }
 
-cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
+cJSON *ljgap__topo_params_json(const ljgap__param *p, size_t np, ljgap__verr *e)
 {
     static const char *const topo_names[] = {"dx",         "dy",         "periodic", "detrend",
                                              "tip_radius", "resolution", NULL};
@@ -279,11 +279,11 @@ cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e)
         param_pointer(ptr, sizeof ptr, field, where);
         quote(q, name, strlen(name));
         if (dup) {
-            ljgap_verr_add(e, ptr, "the query parameter \"%s\" is given more than once", q);
+            ljgap__verr_add(e, ptr, "the query parameter \"%s\" is given more than once", q);
             continue;
         }
         if (!where) {
-            ljgap_verr_add(e, ptr,
+            ljgap__verr_add(e, ptr,
                            "unknown query parameter \"%s\": psd takes dx, dy, periodic, detrend, "
                            "tip_radius, resolution, fit_k_min, fit_k_max and the material's E_star "
                            "(or E1, nu1, E2, nu2), dgamma, epsilon",

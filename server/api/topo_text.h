@@ -11,13 +11,13 @@
  * problem at /topography/heights/ROW/COL whose detail names the line and column (1-based), a
  * row of the wrong length one at /topography/heights/ROW. Stops after max_points values or
  * LJGAP_MAX_ERRORS problems. t->h, t->nx, t->ny receive the matrix (t->h may be NULL). */
-void ljgap_topo_text_parse(const char *body, size_t len, size_t max_points, ljgap_topo_spec *t,
-                           ljgap_verr *e);
+void ljgap__topo_text_parse(const char *body, size_t len, size_t max_points, ljgap__topo_spec *t,
+                           ljgap__verr *e);
 /* The query parameters as a request root {"topography": {...}, "material": {...}}: dx, dy
  * (numbers), periodic (true/false/1/0, or no value: true) and the material's fields (numbers);
  * a value that is none of these goes in as a string (request.c refuses it at the field's
  * pointer). An unknown or repeated parameter is a problem at its pointer (/topography/dx,
  * /material/E_star; /NAME for an unknown one). NULL when out of memory. */
-cJSON *ljgap_topo_params_json(const ljgap_param *p, size_t np, ljgap_verr *e);
+cJSON *ljgap__topo_params_json(const ljgap__param *p, size_t np, ljgap__verr *e);
 
 #endif

@@ -6,11 +6,11 @@
  *                         the PSD of a height matrix in text (FILE or stdin: one row a line,
  *                         heights in m; POST /v1/psd with text/plain): the options are the
  *                         query parameters (--NAME VALUE or --NAME=VALUE; --periodic alone
- *                         means periodic=true), handed to ljgap_handle_text
+ *                         means periodic=true), handed to ljgap__handle_text
  *   ljgap psd [--format NAME] [--channel C] [--NAME VALUE ...] FILE
  *                         the PSD of an instrument file (NanoScope, .gwy, .gsf, xyz columns,
  *                         ...: server/files/), its format recognised by content (POST /v1/psd
- *                         with application/octet-stream), handed to ljgap_handle_file
+ *                         with application/octet-stream), handed to ljgap__handle_file
  *   ljgap simulations [FILE]   run one numerical-model job in the foreground (the body of
  *                         POST /v1/simulations); stdout gets the job's "result" object, stderr
  *                         a progress bar when it is a terminal (nothing otherwise, so logs and
@@ -18,17 +18,17 @@
  *   ljgap combine [--points-per-decade G] FILE FILE ...
  *                         one PSD from several measurements (POST /v1/psd/combine): each FILE
  *                         a /v1/psd answer or a psd object ('-' standard input, once);
- *                         ljgap_combine_body makes the request
+ *                         ljgap__combine_body makes the request
  *   ljgap --csv NAME ...  the answer as CSV (traction, pdf, sweep, simulations), as
  *                         POST /v1/NAME with Accept: text/csv gives it
  *
  * The same contract as POST /v1/NAME (docs/api.md): exit status 0 for a 2xx answer, 1 for a
  * problem (whose body is still printed on stdout), 2 when the command line is wrong or the
- * request cannot be read. A thin shell: all the work is in ljgap_handle_call and
- * ljgap_handle_text. The manual page is man/ljgap.1.
+ * request cannot be read. A thin shell: all the work is in ljgap__handle_call and
+ * ljgap__handle_text. The manual page is man/ljgap.1.
  */
 #include "csv.h"
-#include "files.h" /* ljgap_files_detect: is the file an instrument's? */
+#include "files.h" /* ljgap__files_detect: is the file an instrument's? */
 #include "handler.h"
 #include "ljgap.h"
 
@@ -125,30 +125,30 @@ static void bar_draw(void *ctx, double fraction)
     fflush(stderr);
 }
 
-/* Validates and runs one simulation, the answer into *rep (as ljgap_handle would). */
-static void run_simulation(const char *body, size_t len, ljgap_reply *rep)
+/* Validates and runs one simulation, the answer into *rep (as ljgap__handle would). */
+static void run_simulation(const char *body, size_t len, ljgap__reply *rep)
 {
     bar b = {-1};
     int tty = isatty(STDERR_FILENO);
-    ljgap_sim_control ctl = {0, &interrupted, tty ? bar_draw : NULL, &b};
+    ljgap__sim_control ctl = {0, &interrupted, tty ? bar_draw : NULL, &b};
     struct sigaction sa, old;
-    ljgap_sim_request *rq = ljgap_sim_request_parse(body, len, rep);
+    ljgap__sim_request *rq = ljgap__sim_request_parse(body, len, rep);
     if (!rq) return;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, &old);
-    ljgap_sim_request_run(rq, &ctl, rep);
+    ljgap__sim_request_run(rq, &ctl, rep);
     sigaction(SIGINT, &old, NULL);
     if (b.last >= 0) fputc('\n', stderr);
-    ljgap_sim_request_free(rq);
+    ljgap__sim_request_free(rq);
     fftw_cleanup(); /* the run's FFTW planner state is global */
 }
 
 /* The options after NAME as query parameters (params has room for argc entries); *file gets
  * the one argument that is not an option, if any. Returns the number of parameters, or -1
  * (after a message) when the command line is wrong. */
-static int text_options(int argc, char **argv, ljgap_param *params, const char **file)
+static int text_options(int argc, char **argv, ljgap__param *params, const char **file)
 {
     int n = 0;
     for (int i = 2; i < argc; i++) {
@@ -181,9 +181,9 @@ static int text_options(int argc, char **argv, ljgap_param *params, const char *
 /* Is body an instrument file for psd (rather than a JSON request or a text matrix)? With
  * --format or --channel, always; else when a reader recognises it, except that xyz columns
  * beside a --dx are a text matrix of three columns, and a JSON object stays a request. */
-static int is_instrument_file(const char *body, size_t len, const ljgap_param *p, int np)
+static int is_instrument_file(const char *body, size_t len, const ljgap__param *p, int np)
 {
-    const ljgap_files_format *f;
+    const ljgap__files_format *f;
     int dx = 0;
     for (int i = 0; i < np; i++) {
         if (!strcmp(p[i].name, "format") || !strcmp(p[i].name, "channel")) return 1;
@@ -191,13 +191,13 @@ static int is_instrument_file(const char *body, size_t len, const ljgap_param *p
     }
     size_t k = strspn(body, " \t\r\n");
     if (np < 0 && k < len && body[k] == '{') return 0;
-    f = ljgap_files_detect((const unsigned char *)body, len);
+    f = ljgap__files_detect((const unsigned char *)body, len);
     return f && !(dx && !strcmp(f->name, "xyz"));
 }
 
 /* ljgap combine [--points-per-decade G] [--request] FILE FILE ...: the answer (or with
  * --request the request) into *rep; 2 when the command line or a file is wrong. */
-static int run_combine(int argc, char **argv, const ljgap_call *call, ljgap_reply *rep)
+static int run_combine(int argc, char **argv, const ljgap__call *call, ljgap__reply *rep)
 {
     const char *docs[64];
     size_t lens[64], n = 0;
@@ -236,7 +236,7 @@ static int run_combine(int argc, char **argv, const ljgap_call *call, ljgap_repl
         fprintf(stderr, "ljgap: combine takes two files or more\n");
         goto end;
     }
-    if (!(body = ljgap_combine_body(docs, lens, n, g, err, sizeof err))) {
+    if (!(body = ljgap__combine_body(docs, lens, n, g, err, sizeof err))) {
         fprintf(stderr, "ljgap: combine: %s\n", err);
         goto end;
     }
@@ -246,7 +246,7 @@ static int run_combine(int argc, char **argv, const ljgap_call *call, ljgap_repl
         rep->len = strlen(body);
         body = NULL;
     } else {
-        ljgap_handle_call("psd/combine", body, strlen(body), call, rep);
+        ljgap__handle_call("psd/combine", body, strlen(body), call, rep);
     }
     rc = 0;
 end:
@@ -261,11 +261,11 @@ int main(int argc, char **argv)
     FILE *in = stdin;
     char *body = NULL;
     const char *file = NULL;
-    ljgap_param *params = NULL;
+    ljgap__param *params = NULL;
     size_t len = 0;
-    ljgap_reply rep = {0};
+    ljgap__reply rep = {0};
     int rc = 2, nparams = -1, csv = 0;
-    ljgap_call call = {0};
+    ljgap__call call = {0};
     gsl_set_error_handler_off();
     if (argc == 2 && strcmp(argv[1], "--help") == 0) {
         usage(stdout);
@@ -292,7 +292,7 @@ int main(int argc, char **argv)
     for (int i = 2; i < argc; i++)
         if (strncmp(argv[i], "--", 2) == 0 && argv[i][2]) nparams = 0; /* a text upload */
     if (nparams == 0) {
-        if (!ljgap_handler_has_text(argv[1])) {
+        if (!ljgap__handler_has_text(argv[1])) {
             fprintf(stderr, "ljgap: options are for a text upload, which only psd takes\n");
             usage(stderr);
             return 2;
@@ -314,15 +314,15 @@ int main(int argc, char **argv)
         goto end;
     }
     if (strcmp(argv[1], "psd") == 0 && is_instrument_file(body, len, params, nparams)) {
-        ljgap_handle_file(argv[1], params, nparams > 0 ? (size_t)nparams : 0,
+        ljgap__handle_file(argv[1], params, nparams > 0 ? (size_t)nparams : 0,
                           (const unsigned char *)body, len, &call, &rep);
     } else if (nparams >= 0) {
-        ljgap_handle_text(argv[1], params, (size_t)nparams, body, len, &call, &rep);
+        ljgap__handle_text(argv[1], params, (size_t)nparams, body, len, &call, &rep);
     } else if (strcmp(argv[1], "simulations") == 0) {
         run_simulation(body, len, &rep);
-        if (csv) ljgap_csv_reply(argv[1], &rep);
+        if (csv) ljgap__csv_reply(argv[1], &rep);
     } else {
-        ljgap_handle_call(argv[1], body, len, &call, &rep);
+        ljgap__handle_call(argv[1], body, len, &call, &rep);
     }
 print:
     /* a CSV body ends in its own newline; a JSON one gets one */
@@ -334,7 +334,7 @@ print:
     }
     rc = rep.status >= 200 && rep.status < 300 ? 0 : 1;
 end:
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
     free(params);
     free(body);
     if (in && in != stdin) fclose(in);

@@ -16,29 +16,29 @@ typedef struct {
     size_t pos;
     int bad;      /* a read went past the end (or a seek did) */
     size_t where; /* the offset of the first failed read */
-} ljgap_bytes;
+} ljgap__bytes;
 
-static inline void ljgap_bytes_init(ljgap_bytes *b, const unsigned char *buf, size_t len)
+static inline void ljgap__bytes_init(ljgap__bytes *b, const unsigned char *buf, size_t len)
 {
     b->buf = buf, b->len = len, b->pos = 0, b->bad = 0, b->where = 0;
 }
 
 /* Whether n bytes are there at pos (overflow-safe). */
-static inline int ljgap_bytes_has(const ljgap_bytes *b, size_t pos, size_t n)
+static inline int ljgap__bytes_has(const ljgap__bytes *b, size_t pos, size_t n)
 {
     return pos <= b->len && n <= b->len - pos;
 }
 
-static inline const unsigned char *ljgap_bytes_at(ljgap_bytes *b, size_t pos, size_t n)
+static inline const unsigned char *ljgap__bytes_at(ljgap__bytes *b, size_t pos, size_t n)
 {
-    if (b->bad || !ljgap_bytes_has(b, pos, n)) {
+    if (b->bad || !ljgap__bytes_has(b, pos, n)) {
         if (!b->bad) b->bad = 1, b->where = pos;
         return NULL;
     }
     return b->buf + pos;
 }
 
-static inline int ljgap_bytes_seek(ljgap_bytes *b, size_t pos)
+static inline int ljgap__bytes_seek(ljgap__bytes *b, size_t pos)
 {
     if (b->bad || pos > b->len) {
         if (!b->bad) b->bad = 1, b->where = pos;
@@ -48,9 +48,9 @@ static inline int ljgap_bytes_seek(ljgap_bytes *b, size_t pos)
     return 0;
 }
 
-static inline uint64_t ljgap_bytes_uint(ljgap_bytes *b, size_t n, int big_endian)
+static inline uint64_t ljgap__bytes_uint(ljgap__bytes *b, size_t n, int big_endian)
 {
-    const unsigned char *p = ljgap_bytes_at(b, b->pos, n);
+    const unsigned char *p = ljgap__bytes_at(b, b->pos, n);
     uint64_t v = 0;
     if (!p) return 0;
     for (size_t i = 0; i < n; i++) v |= (uint64_t)p[big_endian ? n - 1 - i : i] << (8 * i);
@@ -58,33 +58,33 @@ static inline uint64_t ljgap_bytes_uint(ljgap_bytes *b, size_t n, int big_endian
     return v;
 }
 
-static inline uint8_t ljgap_bytes_u8(ljgap_bytes *b) { return (uint8_t)ljgap_bytes_uint(b, 1, 0); }
-static inline uint16_t ljgap_bytes_u16(ljgap_bytes *b, int be) { return (uint16_t)ljgap_bytes_uint(b, 2, be); }
-static inline uint32_t ljgap_bytes_u32(ljgap_bytes *b, int be) { return (uint32_t)ljgap_bytes_uint(b, 4, be); }
-static inline uint64_t ljgap_bytes_u64(ljgap_bytes *b, int be) { return ljgap_bytes_uint(b, 8, be); }
-static inline int16_t ljgap_bytes_i16(ljgap_bytes *b, int be) { return (int16_t)ljgap_bytes_u16(b, be); }
-static inline int32_t ljgap_bytes_i32(ljgap_bytes *b, int be) { return (int32_t)ljgap_bytes_u32(b, be); }
+static inline uint8_t ljgap__bytes_u8(ljgap__bytes *b) { return (uint8_t)ljgap__bytes_uint(b, 1, 0); }
+static inline uint16_t ljgap__bytes_u16(ljgap__bytes *b, int be) { return (uint16_t)ljgap__bytes_uint(b, 2, be); }
+static inline uint32_t ljgap__bytes_u32(ljgap__bytes *b, int be) { return (uint32_t)ljgap__bytes_uint(b, 4, be); }
+static inline uint64_t ljgap__bytes_u64(ljgap__bytes *b, int be) { return ljgap__bytes_uint(b, 8, be); }
+static inline int16_t ljgap__bytes_i16(ljgap__bytes *b, int be) { return (int16_t)ljgap__bytes_u16(b, be); }
+static inline int32_t ljgap__bytes_i32(ljgap__bytes *b, int be) { return (int32_t)ljgap__bytes_u32(b, be); }
 
-static inline float ljgap_bytes_f32(ljgap_bytes *b, int be)
+static inline float ljgap__bytes_f32(ljgap__bytes *b, int be)
 {
-    uint32_t u = ljgap_bytes_u32(b, be);
+    uint32_t u = ljgap__bytes_u32(b, be);
     float f;
     memcpy(&f, &u, sizeof f);
     return f;
 }
 
-static inline double ljgap_bytes_f64(ljgap_bytes *b, int be)
+static inline double ljgap__bytes_f64(ljgap__bytes *b, int be)
 {
-    uint64_t u = ljgap_bytes_u64(b, be);
+    uint64_t u = ljgap__bytes_u64(b, be);
     double d;
     memcpy(&d, &u, sizeof d);
     return d;
 }
 
 /* Copies n bytes at the cursor into out (NUL-terminated, at most size - 1 of them kept). */
-static inline int ljgap_bytes_str(ljgap_bytes *b, size_t n, char *out, size_t size)
+static inline int ljgap__bytes_str(ljgap__bytes *b, size_t n, char *out, size_t size)
 {
-    const unsigned char *p = ljgap_bytes_at(b, b->pos, n);
+    const unsigned char *p = ljgap__bytes_at(b, b->pos, n);
     if (!p) {
         if (size) out[0] = 0;
         return -1;

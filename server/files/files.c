@@ -1,13 +1,13 @@
 /* files.c -- the registry of the instrument-file readers and what they share (files.h).
  *
- * ljgap_files_read recognises a file by content: every reader's probe (magic bytes and a look
+ * ljgap__files_read recognises a file by content: every reader's probe (magic bytes and a look
  * at the structure) is asked in the registry's order, most specific first, the loosest (xyz
  * text columns) last; the first that says yes reads it. A format name forces that reader
  * (its own checks then say whether the bytes are that format: 422 bad-file, not 415).
  *
- * Here too: the choice of a channel from the titles a reader found (ljgap_files_channel_pick:
+ * Here too: the choice of a channel from the titles a reader found (ljgap__files_channel_pick:
  * an index, a title, or the height channel by its name), length units to metres
- * (ljgap_files_unit_scale), the count of missing points, and the largest complete rectangle
+ * (ljgap__files_unit_scale), the count of missing points, and the largest complete rectangle
  * of a map with holes, which is what the PSD is computed on (docs/topography.md, "Instrument
  * files"). What only the readers share (a failure's message, the map's allocation, channel
  * titles) is files_util.c's.
@@ -26,19 +26,19 @@
  * MetroPro's, a TIFF with Park's tags), then NanoScope's text header, then the formats whose
  * recognition rests on structure more than on magic (an Igor wave's version and checksum, a
  * Sensofar header), xyz columns last. */
-static const ljgap_files_format *const registry[] = {
-    &ljgap_files_gwy,       &ljgap_files_gsf,      &ljgap_files_x3p,      &ljgap_files_sur,
-    &ljgap_files_netcdf,    &ljgap_files_metropro, &ljgap_files_park_tiff, &ljgap_files_nanoscope,
-    &ljgap_files_ibw,       &ljgap_files_plu,      &ljgap_files_xyz,      NULL};
+static const ljgap__files_format *const registry[] = {
+    &ljgap__files_gwy,       &ljgap__files_gsf,      &ljgap__files_x3p,      &ljgap__files_sur,
+    &ljgap__files_netcdf,    &ljgap__files_metropro, &ljgap__files_park_tiff, &ljgap__files_nanoscope,
+    &ljgap__files_ibw,       &ljgap__files_plu,      &ljgap__files_xyz,      NULL};
 
-const ljgap_files_format *const *ljgap_files_formats(void)
+const ljgap__files_format *const *ljgap__files_formats(void)
 {
     return registry;
 }
 
-const ljgap_files_format *ljgap_files_find(const char *name)
+const ljgap__files_format *ljgap__files_find(const char *name)
 {
-    for (const ljgap_files_format *const *f = registry; *f; f++)
+    for (const ljgap__files_format *const *f = registry; *f; f++)
         if (strcasecmp((*f)->name, name) == 0) return *f;
     return NULL;
 }
@@ -48,7 +48,7 @@ static void names_of(char *out, size_t size, int ext)
 {
     size_t k = 0;
     out[0] = '\0';
-    for (const ljgap_files_format *const *f = registry; *f && k < size; f++) {
+    for (const ljgap__files_format *const *f = registry; *f && k < size; f++) {
         int n = ext ? snprintf(out + k, size - k, "%s%s (%s)", k ? ", " : "", (*f)->name,
                                (*f)->extensions)
                     : snprintf(out + k, size - k, "%s%s", k ? ", " : "", (*f)->name);
@@ -57,20 +57,20 @@ static void names_of(char *out, size_t size, int ext)
     }
 }
 
-const ljgap_files_format *ljgap_files_detect(const unsigned char *buf, size_t len)
+const ljgap__files_format *ljgap__files_detect(const unsigned char *buf, size_t len)
 {
-    for (const ljgap_files_format *const *f = registry; buf && len && *f; f++)
+    for (const ljgap__files_format *const *f = registry; buf && len && *f; f++)
         if ((*f)->probe(buf, len)) return *f;
     return NULL;
 }
 
-void ljgap_files_names(char *out, size_t size)
+void ljgap__files_names(char *out, size_t size)
 {
     names_of(out, size, 1);
 }
 
 /* err's message and format (no offset, no member); LJGAP_FILES_BAD. */
-static int set_err(ljgap_files_err *err, const char *format, const char *fmt, const char *arg)
+static int set_err(ljgap__files_err *err, const char *format, const char *fmt, const char *arg)
 {
     snprintf(err->msg, sizeof err->msg, fmt, arg);
     err->format = format;
@@ -94,7 +94,7 @@ static int is_height_title(const char *t)
     return 0;
 }
 
-int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel, ljgap_files_err *err)
+int ljgap__files_channel_pick(const ljgap__files_map *map, const char *channel, ljgap__files_err *err)
 {
     char list[LJGAP_FILES_MAX_CHANNELS * 24] = "";
     size_t k = 0;
@@ -127,7 +127,7 @@ int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel, lj
     return -1;
 }
 
-double ljgap_files_unit_scale(const char *unit)
+double ljgap__files_unit_scale(const char *unit)
 {
     static const struct {
         const char *name;
@@ -152,7 +152,7 @@ double ljgap_files_unit_scale(const char *unit)
     return 0;
 }
 
-size_t ljgap_files_count_missing(ljgap_files_map *map)
+size_t ljgap__files_count_missing(ljgap__files_map *map)
 {
     size_t n = 0, N = map->nx * map->ny;
     for (size_t i = 0; i < N; i++)
@@ -161,7 +161,7 @@ size_t ljgap_files_count_missing(ljgap_files_map *map)
     return n;
 }
 
-int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0, size_t *w,
+int ljgap__files_largest_rect(const ljgap__files_map *map, size_t *x0, size_t *y0, size_t *w,
                              size_t *h)
 {
     /* the maximal rectangle of complete points: per row, the heights of the columns of
@@ -197,7 +197,7 @@ int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0,
     return 0;
 }
 
-void ljgap_files_map_free(ljgap_files_map *map)
+void ljgap__files_map_free(ljgap__files_map *map)
 {
     if (!map) return;
     free(map->z);
@@ -205,10 +205,10 @@ void ljgap_files_map_free(ljgap_files_map *map)
     map->nx = map->ny = 0;
 }
 
-int ljgap_files_read(const unsigned char *buf, size_t len, const char *format, const char *channel,
-                     ljgap_files_map *map, ljgap_files_err *err)
+int ljgap__files_read(const unsigned char *buf, size_t len, const char *format, const char *channel,
+                     ljgap__files_map *map, ljgap__files_err *err)
 {
-    const ljgap_files_format *f = NULL;
+    const ljgap__files_format *f = NULL;
     char names[160];
     int st;
     memset(map, 0, sizeof *map);
@@ -216,14 +216,14 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format, c
     err->offset = -1;
     if (!buf) len = 0;
     if (format && *format) {
-        if (!(f = ljgap_files_find(format))) {
+        if (!(f = ljgap__files_find(format))) {
             names_of(names, sizeof names, 0);
             snprintf(err->msg, sizeof err->msg, "no format \"%.32s\": the formats read are %.160s",
                      format, names);
             return LJGAP_FILES_UNKNOWN;
         }
     } else {
-        if (!(f = ljgap_files_detect(buf, len))) {
+        if (!(f = ljgap__files_detect(buf, len))) {
             names_of(names, sizeof names, 0);
             snprintf(err->msg, sizeof err->msg, "not a file of a format read here: %.160s", names);
             return LJGAP_FILES_UNKNOWN;
@@ -236,12 +236,12 @@ int ljgap_files_read(const unsigned char *buf, size_t len, const char *format, c
     if (st == 0 && (!map->z || !map->nx || !map->ny))
         st = set_err(err, f->name, "%s", "the reader found no data");
     if (st == 0) {
-        ljgap_files_count_missing(map);
+        ljgap__files_count_missing(map);
         if (map->missing == map->nx * map->ny)
             st = set_err(err, f->name, "%s", "every point of the map is missing");
     }
     if (st) {
-        ljgap_files_map_free(map);
+        ljgap__files_map_free(map);
         if (!err->format) err->format = f->name;
     }
     return st;

@@ -7,16 +7,16 @@
  * value) comes out as NaN and is counted in map->missing. Knows nothing of HTTP or JSON; the
  * request layer (server/api) and the CLI use it.
  *
- *   ljgap_files_read(buf, len, format, channel, &map, &err)
+ *   ljgap__files_read(buf, len, format, channel, &map, &err)
  *       format: NULL or "" to recognise the format from its magic bytes and structure, else a
- *       format's name (ljgap_files_formats) to force it; channel: NULL or "" for the default
+ *       format's name (ljgap__files_formats) to force it; channel: NULL or "" for the default
  *       (the height channel), else a channel's index ("0", "1", ...) or title.
  *       Returns 0, or LJGAP_FILES_UNKNOWN (no reader recognises the bytes, or an unknown
  *       format name: 415), LJGAP_FILES_BAD (a reader recognised the format but the file is
  *       truncated, corrupt or inconsistent: 422 bad-file; err says the format and the byte
  *       offset or the member), LJGAP_FILES_CHANNEL (no such channel: 422 at the channel),
  *       LJGAP_FILES_NOMEM, LJGAP_FILES_TOOBIG (the map would exceed LJGAP_FILES_MAX_POINTS).
- *   ljgap_files_map_free(&map) releases it (also after a failure: always safe).
+ *   ljgap__files_map_free(&map) releases it (also after a failure: always safe).
  */
 #ifndef LJGAP_FILES_H
 #define LJGAP_FILES_H
@@ -49,14 +49,14 @@ typedef struct {
     char z_unit[32];                   /* the height unit the file states ("nm", "m", "V"...) */
     char instrument[LJGAP_FILES_TEXT]; /* instrument name/model where stored, else "" */
     char acquired[40];                 /* date of the scan, ISO 8601 where stored, else "" */
-} ljgap_files_map;
+} ljgap__files_map;
 
 typedef struct {
     char msg[256];      /* what is wrong, for the problem's detail */
     const char *format; /* the format it was read as (NULL when unknown) */
     long offset;        /* the byte offset of the fault, -1 when not applicable */
     char member[64];    /* the member of a container (X3P's zip) or "" */
-} ljgap_files_err;
+} ljgap__files_err;
 
 /* One format: its name, its extensions (for docs and messages only: recognition is by
  * content), whether bytes look like it (a cheap check of magic bytes and structure), and its
@@ -67,43 +67,43 @@ typedef struct {
     const char *extensions; /* ".spm .000 .di" */
     const char *media_type; /* the format's own media type where one exists, else NULL */
     int (*probe)(const unsigned char *buf, size_t len);
-    int (*read)(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                ljgap_files_err *err);
-} ljgap_files_format;
+    int (*read)(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                ljgap__files_err *err);
+} ljgap__files_format;
 
-int ljgap_files_read(const unsigned char *buf, size_t len, const char *format,
-                     const char *channel, ljgap_files_map *map, ljgap_files_err *err);
-void ljgap_files_map_free(ljgap_files_map *map);
+int ljgap__files_read(const unsigned char *buf, size_t len, const char *format,
+                     const char *channel, ljgap__files_map *map, ljgap__files_err *err);
+void ljgap__files_map_free(ljgap__files_map *map);
 
 /* The formats read, in recognition order, NULL-terminated. */
-const ljgap_files_format *const *ljgap_files_formats(void);
+const ljgap__files_format *const *ljgap__files_formats(void);
 
 /* The readers (one file each, server/files/FORMAT.c). */
-extern const ljgap_files_format ljgap_files_nanoscope, ljgap_files_x3p, ljgap_files_sur,
-    ljgap_files_gwy, ljgap_files_gsf, ljgap_files_netcdf, ljgap_files_metropro, ljgap_files_ibw,
-    ljgap_files_park_tiff, ljgap_files_plu, ljgap_files_xyz;
+extern const ljgap__files_format ljgap__files_nanoscope, ljgap__files_x3p, ljgap__files_sur,
+    ljgap__files_gwy, ljgap__files_gsf, ljgap__files_netcdf, ljgap__files_metropro, ljgap__files_ibw,
+    ljgap__files_park_tiff, ljgap__files_plu, ljgap__files_xyz;
 
 /* ---- beside the readers: for the request layer, the CLI and the tests ---- */
 /* The format of that name (case-insensitive), or NULL. */
-const ljgap_files_format *ljgap_files_find(const char *name);
+const ljgap__files_format *ljgap__files_find(const char *name);
 /* The format whose probe recognises buf (the registry's order), or NULL. */
-const ljgap_files_format *ljgap_files_detect(const unsigned char *buf, size_t len);
+const ljgap__files_format *ljgap__files_detect(const unsigned char *buf, size_t len);
 /* "name (extensions), ..." of every format read, into out (for 415 details and --help). */
-void ljgap_files_names(char *out, size_t size);
+void ljgap__files_names(char *out, size_t size);
 /* The channel a request names (NULL or "": the height channel, by a title such as Height,
  * Topography, ZSensor; else channel 0), among map->channels: its index, or -1 with err->msg
  * listing the channels. Readers call it once their titles are in map->channels. */
-int ljgap_files_channel_pick(const ljgap_files_map *map, const char *channel,
-                             ljgap_files_err *err);
+int ljgap__files_channel_pick(const ljgap__files_map *map, const char *channel,
+                             ljgap__files_err *err);
 /* Counts the NaN of map->z into map->missing (and returns it). */
-size_t ljgap_files_count_missing(ljgap_files_map *map);
+size_t ljgap__files_count_missing(ljgap__files_map *map);
 /* The largest rectangle of complete (non-NaN) points: its first column x0, first row y0,
  * width w and height h (all 0 when every point is missing); -1 when out of memory. */
-int ljgap_files_largest_rect(const ljgap_files_map *map, size_t *x0, size_t *y0, size_t *w,
+int ljgap__files_largest_rect(const ljgap__files_map *map, size_t *x0, size_t *y0, size_t *w,
                              size_t *h);
 
 /* The factor from a length unit ("m", "mm", "um", "µm", "~m", "nm", "pm", "A", ...) to
  * metres, 0 when unit is not a length. */
-double ljgap_files_unit_scale(const char *unit);
+double ljgap__files_unit_scale(const char *unit);
 
 #endif

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, const char *member,
+int ljgap__files_fail(ljgap__files_err *err, const char *format, long offset, const char *member,
                      const char *fmt, ...)
 {
     va_list ap;
@@ -23,12 +23,12 @@ int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, cons
     return LJGAP_FILES_BAD;
 }
 
-int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err)
+int ljgap__files_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err)
 {
     if (nx == 0 || ny == 0)
-        return ljgap_files_fail(err, map->format, -1, NULL, "a map of %zu x %zu points", nx, ny);
+        return ljgap__files_fail(err, map->format, -1, NULL, "a map of %zu x %zu points", nx, ny);
     if (nx > LJGAP_FILES_MAX_POINTS / ny) {
-        ljgap_files_fail(err, map->format, -1, NULL,
+        ljgap__files_fail(err, map->format, -1, NULL,
                          "%zu x %zu points: more than the %u a map may have", nx, ny,
                          LJGAP_FILES_MAX_POINTS);
         return LJGAP_FILES_TOOBIG;
@@ -43,13 +43,13 @@ int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_er
     return 0;
 }
 
-void ljgap_files_add_channel(ljgap_files_map *map, const char *title)
+void ljgap__files_add_channel(ljgap__files_map *map, const char *title)
 {
     if (map->n_channels >= LJGAP_FILES_MAX_CHANNELS) return;
-    ljgap_files_text(map->channels[map->n_channels++], LJGAP_FILES_TEXT, title, strlen(title));
+    ljgap__files_text(map->channels[map->n_channels++], LJGAP_FILES_TEXT, title, strlen(title));
 }
 
-void ljgap_files_text(char *out, size_t size, const char *s, size_t n)
+void ljgap__files_text(char *out, size_t size, const char *s, size_t n)
 {
     size_t k = 0;
     while (n && isspace((unsigned char)*s))

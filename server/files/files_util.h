@@ -10,14 +10,14 @@
 #include <stddef.h>
 
 /* Fills err (format, offset or -1, member or NULL, a printf message); returns LJGAP_FILES_BAD. */
-int ljgap_files_fail(ljgap_files_err *err, const char *format, long offset, const char *member,
+int ljgap__files_fail(ljgap__files_err *err, const char *format, long offset, const char *member,
                      const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 /* map->z for nx x ny points (map->nx, ny set): 0, LJGAP_FILES_BAD (an empty map),
  * LJGAP_FILES_TOOBIG (over LJGAP_FILES_MAX_POINTS) or LJGAP_FILES_NOMEM. */
-int ljgap_files_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err);
+int ljgap__files_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err);
 /* Appends a channel title (at most LJGAP_FILES_MAX_CHANNELS are kept). */
-void ljgap_files_add_channel(ljgap_files_map *map, const char *title);
+void ljgap__files_add_channel(ljgap__files_map *map, const char *title);
 /* s[0..n) into out, trimmed, bytes outside printable ASCII as '?'. */
-void ljgap_files_text(char *out, size_t size, const char *s, size_t n);
+void ljgap__files_text(char *out, size_t size, const char *s, size_t n);
 
 #endif

@@ -43,7 +43,7 @@ static int get(const char *hdr, size_t n, const char *key, char *out, size_t siz
                 t++, r--;
             if (r && *t == '=') {
                 t++, r--;
-                ljgap_files_text(out, size, t, r);
+                ljgap__files_text(out, size, t, r);
                 return 1;
             }
         }
@@ -51,56 +51,56 @@ static int get(const char *hdr, size_t n, const char *key, char *out, size_t siz
     return 0;
 }
 
-static int read_gsf(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int read_gsf(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
     const unsigned char *nul = memchr(buf, '\0', len);
     char v[LJGAP_FILES_TEXT], *end;
     long xres, yres;
     int st;
     if (!probe(buf, len))
-        return ljgap_files_fail(err, NAME, 0, NULL, "no \"" MAGIC "\" line at the start");
+        return ljgap__files_fail(err, NAME, 0, NULL, "no \"" MAGIC "\" line at the start");
     if (!nul)
-        return ljgap_files_fail(err, NAME, (long)len, NULL,
+        return ljgap__files_fail(err, NAME, (long)len, NULL,
                                 "the header has no NUL padding after it (truncated)");
     size_t hlen = (size_t)(nul - buf), data = (hlen / 4 + 1) * 4;
     const char *hdr = (const char *)buf;
     if (!get(hdr, hlen, "XRes", v, sizeof v) || (xres = strtol(v, &end, 10)) <= 0 || *end ||
         !get(hdr, hlen, "YRes", v, sizeof v) || (yres = strtol(v, &end, 10)) <= 0 || *end)
-        return ljgap_files_fail(err, NAME, -1, NULL,
+        return ljgap__files_fail(err, NAME, -1, NULL,
                                 "XRes and YRes, the grid, must be positive whole numbers");
-    ljgap_files_add_channel(map, get(hdr, hlen, "Title", v, sizeof v) && v[0] ? v : "Data");
-    if (ljgap_files_channel_pick(map, channel, err) < 0) return LJGAP_FILES_CHANNEL;
+    ljgap__files_add_channel(map, get(hdr, hlen, "Title", v, sizeof v) && v[0] ? v : "Data");
+    if (ljgap__files_channel_pick(map, channel, err) < 0) return LJGAP_FILES_CHANNEL;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[0]);
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     for (size_t i = hlen; i < data; i++)
         if (i < len && buf[i] != 0)
-            return ljgap_files_fail(err, NAME, (long)i, NULL,
+            return ljgap__files_fail(err, NAME, (long)i, NULL,
                                     "the header's NUL padding holds a byte that is not NUL");
     /* the data checked before the map is allocated: a header cannot claim memory it lacks */
     if ((unsigned long)xres > LJGAP_FILES_MAX_POINTS / (unsigned long)yres)
-        return ljgap_files_alloc(map, (size_t)xres, (size_t)yres, err);
+        return ljgap__files_alloc(map, (size_t)xres, (size_t)yres, err);
     size_t N = (size_t)xres * (size_t)yres;
-    if (!ljgap_bytes_at(&b, data, 4 * N))
-        return ljgap_files_fail(err, NAME, (long)len, NULL,
+    if (!ljgap__bytes_at(&b, data, 4 * N))
+        return ljgap__files_fail(err, NAME, (long)len, NULL,
                                 "%zu floats need %zu bytes after the header at %zu, the file has "
                                 "%zu (truncated)",
                                 N, 4 * N, data, len);
-    if ((st = ljgap_files_alloc(map, (size_t)xres, (size_t)yres, err))) return st;
-    ljgap_bytes_seek(&b, data);
+    if ((st = ljgap__files_alloc(map, (size_t)xres, (size_t)yres, err))) return st;
+    ljgap__bytes_seek(&b, data);
     double zs = 1;
     if (get(hdr, hlen, "ZUnits", v, sizeof v)) {
-        ljgap_files_text(map->z_unit, sizeof map->z_unit, v, strlen(v));
-        double s = ljgap_files_unit_scale(v);
+        ljgap__files_text(map->z_unit, sizeof map->z_unit, v, strlen(v));
+        double s = ljgap__files_unit_scale(v);
         if (s > 0) zs = s;
     }
     for (size_t i = 0; i < N; i++) {
-        float f = ljgap_bytes_f32(&b, 0);
+        float f = ljgap__bytes_f32(&b, 0);
         map->z[i] = isfinite(f) ? zs * f : NAN;
     }
     double xreal = 0, yreal = 0, xs = 1;
-    if (get(hdr, hlen, "XYUnits", v, sizeof v)) xs = ljgap_files_unit_scale(v);
+    if (get(hdr, hlen, "XYUnits", v, sizeof v)) xs = ljgap__files_unit_scale(v);
     if (get(hdr, hlen, "XReal", v, sizeof v)) xreal = strtod(v, NULL);
     if (get(hdr, hlen, "YReal", v, sizeof v))
         yreal = strtod(v, NULL);
@@ -111,4 +111,4 @@ static int read_gsf(const unsigned char *buf, size_t len, const char *channel, l
     return 0;
 }
 
-const ljgap_files_format ljgap_files_gsf = {NAME, ".gsf", NULL, probe, read_gsf};
+const ljgap__files_format ljgap__files_gsf = {NAME, ".gsf", NULL, probe, read_gsf};

@@ -40,7 +40,7 @@ static int probe(const unsigned char *buf, size_t len)
 }
 
 /* A NUL-terminated string at the cursor into out (cut to size); -1 when it does not end. */
-static int cstr(ljgap_bytes *b, char *out, size_t size)
+static int cstr(ljgap__bytes *b, char *out, size_t size)
 {
     const unsigned char *p = b->bad ? NULL : memchr(b->buf + b->pos, '\0', b->len - b->pos);
     if (!p) {
@@ -49,17 +49,17 @@ static int cstr(ljgap_bytes *b, char *out, size_t size)
         return -1;
     }
     size_t n = (size_t)(p - (b->buf + b->pos));
-    if (out) ljgap_files_text(out, size, (const char *)b->buf + b->pos, n);
+    if (out) ljgap__files_text(out, size, (const char *)b->buf + b->pos, n);
     b->pos += n + 1;
     return 0;
 }
 
 /* An object's header at the cursor: its type name and the end of its components. */
-static int object_head(ljgap_bytes *b, char *type, size_t tsize, size_t *end)
+static int object_head(ljgap__bytes *b, char *type, size_t tsize, size_t *end)
 {
     if (cstr(b, type, tsize)) return -1;
-    uint32_t size = ljgap_bytes_u32(b, 0);
-    if (b->bad || !ljgap_bytes_has(b, b->pos, size)) {
+    uint32_t size = ljgap__bytes_u32(b, 0);
+    if (b->bad || !ljgap__bytes_has(b, b->pos, size)) {
         if (!b->bad) b->bad = 1, b->where = b->len;
         return -1;
     }
@@ -67,9 +67,9 @@ static int object_head(ljgap_bytes *b, char *type, size_t tsize, size_t *end)
     return 0;
 }
 
-static int skip_value(ljgap_bytes *b, char t, int depth);
+static int skip_value(ljgap__bytes *b, char t, int depth);
 
-static int skip_object(ljgap_bytes *b, int depth)
+static int skip_object(ljgap__bytes *b, int depth)
 {
     char type[64];
     size_t end;
@@ -77,11 +77,11 @@ static int skip_object(ljgap_bytes *b, int depth)
         if (!b->bad) b->bad = 1, b->where = b->pos;
         return -1;
     }
-    return ljgap_bytes_seek(b, end);
+    return ljgap__bytes_seek(b, end);
 }
 
 /* Skips one value of type t at the cursor. */
-static int skip_value(ljgap_bytes *b, char t, int depth)
+static int skip_value(ljgap__bytes *b, char t, int depth)
 {
     size_t one = 0;
     switch (t) {
@@ -106,7 +106,7 @@ static int skip_value(ljgap_bytes *b, char t, int depth)
     case 'D':
     case 'S':
     case 'O': {
-        uint32_t n = ljgap_bytes_u32(b, 0);
+        uint32_t n = ljgap__bytes_u32(b, 0);
         if (b->bad) return -1;
         if (t == 'S' || t == 'O') {
             for (uint32_t i = 0; i < n && !b->bad; i++)
@@ -114,7 +114,7 @@ static int skip_value(ljgap_bytes *b, char t, int depth)
             return b->bad ? -1 : 0;
         }
         size_t w = t == 'C' ? 1 : t == 'I' ? 4 : 8;
-        if (!ljgap_bytes_has(b, b->pos, (size_t)n * w)) {
+        if (!ljgap__bytes_has(b, b->pos, (size_t)n * w)) {
             b->bad = 1, b->where = b->len;
             return -1;
         }
@@ -125,7 +125,7 @@ static int skip_value(ljgap_bytes *b, char t, int depth)
         if (!b->bad) b->bad = 1, b->where = b->pos - 1;
         return -1;
     }
-    return ljgap_bytes_at(b, b->pos, one) ? (b->pos += one, 0) : -1;
+    return ljgap__bytes_at(b, b->pos, one) ? (b->pos += one, 0) : -1;
 }
 
 /* "/N/data", "/N/data/title", "/N/mask": N and which (1, 2, 3), else 0. */
@@ -153,7 +153,7 @@ static field *field_of(field *f, int *n, int id)
 }
 
 /* A GwySIUnit object's unitstr at the cursor into unit. */
-static void si_unit(ljgap_bytes *b, char *unit, size_t size)
+static void si_unit(ljgap__bytes *b, char *unit, size_t size)
 {
     char type[32], name[32];
     size_t end;
@@ -161,13 +161,13 @@ static void si_unit(ljgap_bytes *b, char *unit, size_t size)
     if (object_head(b, type, sizeof type, &end)) return;
     while (b->pos < end && !b->bad) {
         cstr(b, name, sizeof name);
-        char t = (char)ljgap_bytes_u8(b);
+        char t = (char)ljgap__bytes_u8(b);
         if (t == 's' && strcmp(name, "unitstr") == 0)
             cstr(b, unit, size);
         else
             skip_value(b, t, 2);
     }
-    ljgap_bytes_seek(b, end);
+    ljgap__bytes_seek(b, end);
 }
 
 typedef struct {
@@ -180,35 +180,35 @@ typedef struct {
 
 /* A GwyDataField object at off. */
 static int data_field(const unsigned char *buf, size_t len, size_t off, datafield *d,
-                      ljgap_files_err *err)
+                      ljgap__files_err *err)
 {
-    ljgap_bytes b;
+    ljgap__bytes b;
     char type[32], name[32];
     size_t end;
     memset(d, 0, sizeof *d);
-    ljgap_bytes_init(&b, buf, len);
-    ljgap_bytes_seek(&b, off);
+    ljgap__bytes_init(&b, buf, len);
+    ljgap__bytes_seek(&b, off);
     if (object_head(&b, type, sizeof type, &end) || strcmp(type, "GwyDataField") != 0)
-        return ljgap_files_fail(err, NAME, (long)off, NULL, "a channel that is no GwyDataField");
+        return ljgap__files_fail(err, NAME, (long)off, NULL, "a channel that is no GwyDataField");
     while (b.pos < end && !b.bad) {
         cstr(&b, name, sizeof name);
-        char t = (char)ljgap_bytes_u8(&b);
+        char t = (char)ljgap__bytes_u8(&b);
         if (t == 'i' && strcmp(name, "xres") == 0)
-            d->xres = ljgap_bytes_i32(&b, 0);
+            d->xres = ljgap__bytes_i32(&b, 0);
         else if (t == 'i' && strcmp(name, "yres") == 0)
-            d->yres = ljgap_bytes_i32(&b, 0);
+            d->yres = ljgap__bytes_i32(&b, 0);
         else if (t == 'd' && strcmp(name, "xreal") == 0)
-            d->xreal = ljgap_bytes_f64(&b, 0);
+            d->xreal = ljgap__bytes_f64(&b, 0);
         else if (t == 'd' && strcmp(name, "yreal") == 0)
-            d->yreal = ljgap_bytes_f64(&b, 0);
+            d->yreal = ljgap__bytes_f64(&b, 0);
         else if (t == 'o' && strcmp(name, "si_unit_xy") == 0)
             si_unit(&b, d->uxy, sizeof d->uxy);
         else if (t == 'o' && strcmp(name, "si_unit_z") == 0)
             si_unit(&b, d->uz, sizeof d->uz);
         else if (t == 'D' && strcmp(name, "data") == 0) {
-            d->ndata = ljgap_bytes_u32(&b, 0);
+            d->ndata = ljgap__bytes_u32(&b, 0);
             d->data = b.pos;
-            if (!ljgap_bytes_has(&b, b.pos, (size_t)d->ndata * 8)) {
+            if (!ljgap__bytes_has(&b, b.pos, (size_t)d->ndata * 8)) {
                 b.bad = 1, b.where = b.len;
                 break;
             }
@@ -217,37 +217,37 @@ static int data_field(const unsigned char *buf, size_t len, size_t off, datafiel
             skip_value(&b, t, 1);
     }
     if (b.bad)
-        return ljgap_files_fail(err, NAME, (long)b.where, NULL,
+        return ljgap__files_fail(err, NAME, (long)b.where, NULL,
                                 "the GwyDataField at byte %zu is cut short or corrupt", off);
     if (d->xres <= 0 || d->yres <= 0 || !d->data ||
         (uint64_t)d->ndata != (uint64_t)d->xres * (uint64_t)d->yres)
-        return ljgap_files_fail(err, NAME, (long)off, NULL,
+        return ljgap__files_fail(err, NAME, (long)off, NULL,
                                 "the GwyDataField at byte %zu has %ld x %ld points and %u values",
                                 off, d->xres, d->yres, d->ndata);
     return 0;
 }
 
-static int read_gwy(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int read_gwy(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
     field f[MAX_FIELDS];
     int nf = 0, id, st, pick;
     char type[32], name[96];
     size_t end;
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    if (!probe(buf, len)) return ljgap_files_fail(err, NAME, 0, NULL, "no GWYP at the start");
-    ljgap_bytes_seek(&b, 4);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    if (!probe(buf, len)) return ljgap__files_fail(err, NAME, 0, NULL, "no GWYP at the start");
+    ljgap__bytes_seek(&b, 4);
     if (object_head(&b, type, sizeof type, &end))
-        return ljgap_files_fail(err, NAME, (long)b.where, NULL,
+        return ljgap__files_fail(err, NAME, (long)b.where, NULL,
                                 "the top object's size runs past the end of the file (truncated)");
     if (strcmp(type, "GwyContainer") != 0)
-        return ljgap_files_fail(err, NAME, 4, NULL, "the top object is a %s, not a GwyContainer",
+        return ljgap__files_fail(err, NAME, 4, NULL, "the top object is a %s, not a GwyContainer",
                                 type);
     while (b.pos < end && !b.bad) {
         size_t at = b.pos;
         cstr(&b, name, sizeof name);
-        char t = (char)ljgap_bytes_u8(&b);
+        char t = (char)ljgap__bytes_u8(&b);
         int which = b.bad ? 0 : channel_key(name, &id);
         field *fd = which ? field_of(f, &nf, id) : NULL;
         if (fd && which == 1 && t == 'o') fd->data = b.pos;
@@ -259,7 +259,7 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel, l
         if (skip_value(&b, t, 0) && !b.bad) b.bad = 1, b.where = at;
     }
     if (b.bad)
-        return ljgap_files_fail(err, NAME, (long)b.where, NULL,
+        return ljgap__files_fail(err, NAME, (long)b.where, NULL,
                                 "a member of the container is cut short or corrupt");
     /* the channels in the order of their numbers (a container keeps no order) */
     for (int i = 1; i < nf; i++)
@@ -271,12 +271,12 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel, l
     for (int i = 0; i < nf; i++)
         if (f[i].data) f[keep++] = f[i];
     nf = keep;
-    if (!nf) return ljgap_files_fail(err, NAME, -1, NULL, "the file holds no channel (/N/data)");
+    if (!nf) return ljgap__files_fail(err, NAME, -1, NULL, "the file holds no channel (/N/data)");
     for (int i = 0; i < nf; i++) {
         if (!f[i].title[0]) snprintf(f[i].title, sizeof f[i].title, "channel %d", f[i].id);
-        ljgap_files_add_channel(map, f[i].title);
+        ljgap__files_add_channel(map, f[i].title);
     }
-    if ((pick = ljgap_files_channel_pick(map, channel, err)) < 0) return LJGAP_FILES_CHANNEL;
+    if ((pick = ljgap__files_channel_pick(map, channel, err)) < 0) return LJGAP_FILES_CHANNEL;
     map->channel_index = pick;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[pick]);
     datafield d, m;
@@ -285,15 +285,15 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel, l
         snprintf(err->member, sizeof err->member, "%.60s", name);
         return st;
     }
-    if ((st = ljgap_files_alloc(map, (size_t)d.xres, (size_t)d.yres, err))) return st;
-    double zs = ljgap_files_unit_scale(d.uz), xs = ljgap_files_unit_scale(d.uxy);
+    if ((st = ljgap__files_alloc(map, (size_t)d.xres, (size_t)d.yres, err))) return st;
+    double zs = ljgap__files_unit_scale(d.uz), xs = ljgap__files_unit_scale(d.uxy);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", d.uz);
-    ljgap_bytes_seek(&b, d.data);
+    ljgap__bytes_seek(&b, d.data);
     for (size_t i = 0; i < map->nx * map->ny; i++) {
-        double z = ljgap_bytes_f64(&b, 0);
+        double z = ljgap__bytes_f64(&b, 0);
         map->z[i] = isfinite(z) ? (zs > 0 ? zs : 1) * z : NAN;
         if (isinf(map->z[i]))
-            return ljgap_files_fail(err, NAME, (long)(d.data + 8 * i), name,
+            return ljgap__files_fail(err, NAME, (long)(d.data + 8 * i), name,
                                     "a height of %g %s overflows in metres", z, d.uz);
     }
     if (f[pick].mask) {
@@ -303,18 +303,18 @@ static int read_gwy(const unsigned char *buf, size_t len, const char *channel, l
             return st;
         }
         if (m.xres != d.xres || m.yres != d.yres) {
-            ljgap_files_fail(err, NAME, (long)f[pick].mask, name,
+            ljgap__files_fail(err, NAME, (long)f[pick].mask, name,
                              "the mask has %ld x %ld points, its channel %ld x %ld", m.xres, m.yres,
                              d.xres, d.yres);
             return LJGAP_FILES_BAD;
         }
-        ljgap_bytes_seek(&b, m.data);
+        ljgap__bytes_seek(&b, m.data);
         for (size_t i = 0; i < map->nx * map->ny; i++)
-            if (ljgap_bytes_f64(&b, 0) > 0.5) map->z[i] = NAN;
+            if (ljgap__bytes_f64(&b, 0) > 0.5) map->z[i] = NAN;
     }
     if (xs > 0 && isfinite(d.xreal) && isfinite(d.yreal) && d.xreal > 0 && d.yreal > 0)
         map->size_x = xs * d.xreal, map->size_y = xs * d.yreal;
     return 0;
 }
 
-const ljgap_files_format ljgap_files_gwy = {NAME, ".gwy", NULL, probe, read_gwy};
+const ljgap__files_format ljgap__files_gwy = {NAME, ".gwy", NULL, probe, read_gwy};

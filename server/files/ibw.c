@@ -53,7 +53,7 @@
 #define LABEL 32    /* one dimension label */
 #define NOTE_MAX 64 /* the longest note value kept */
 
-static int bad(ljgap_files_err *err, long offset, const char *fmt, ...)
+static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -72,9 +72,9 @@ static size_t bin_size(unsigned v)
 /* The version and byte order of the first two bytes, 0 when they are no Igor version. */
 static unsigned version_of(const unsigned char *buf, size_t len, int *be)
 {
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    const unsigned char *p = ljgap_bytes_at(&b, 0, 2);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap__bytes_at(&b, 0, 2);
     if (!p) return 0;
     *be = p[0] == 0;
     unsigned v = *be ? p[1] : p[0] | (unsigned)p[1] << 8;
@@ -85,9 +85,9 @@ static unsigned version_of(const unsigned char *buf, size_t len, int *be)
  * the file is shorter than n). */
 static unsigned checksum(const unsigned char *buf, size_t len, size_t n, int be)
 {
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    const unsigned char *p = ljgap_bytes_at(&b, 0, n);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap__bytes_at(&b, 0, n);
     unsigned s = 0;
     if (!p) return 1;
     for (size_t i = 0; i + 1 < n; i += 2)
@@ -268,25 +268,25 @@ static size_t type_size(unsigned type)
     }
 }
 
-static double value_at(ljgap_bytes *b, unsigned type, int be)
+static double value_at(ljgap__bytes *b, unsigned type, int be)
 {
     switch (type) {
     case 0x02:
-        return ljgap_bytes_f32(b, be);
+        return ljgap__bytes_f32(b, be);
     case 0x04:
-        return ljgap_bytes_f64(b, be);
+        return ljgap__bytes_f64(b, be);
     case 0x08:
-        return (int8_t)ljgap_bytes_u8(b);
+        return (int8_t)ljgap__bytes_u8(b);
     case 0x48:
-        return ljgap_bytes_u8(b);
+        return ljgap__bytes_u8(b);
     case 0x10:
-        return ljgap_bytes_i16(b, be);
+        return ljgap__bytes_i16(b, be);
     case 0x50:
-        return ljgap_bytes_u16(b, be);
+        return ljgap__bytes_u16(b, be);
     case 0x20:
-        return ljgap_bytes_i32(b, be);
+        return ljgap__bytes_i32(b, be);
     default:
-        return ljgap_bytes_u32(b, be);
+        return ljgap__bytes_u32(b, be);
     }
 }
 
@@ -309,33 +309,33 @@ typedef struct {
 } wave;
 
 /* Reads the headers and locates the sections of a version 5 wave. */
-static int read_v5(ljgap_bytes *b, wave *w, ljgap_files_err *err)
+static int read_v5(ljgap__bytes *b, wave *w, ljgap__files_err *err)
 {
     int be = w->be;
-    ljgap_bytes_seek(b, 4);
-    uint32_t wfm = ljgap_bytes_u32(b, be), formula = ljgap_bytes_u32(b, be);
-    uint32_t note = ljgap_bytes_u32(b, be), data_eunits = ljgap_bytes_u32(b, be);
+    ljgap__bytes_seek(b, 4);
+    uint32_t wfm = ljgap__bytes_u32(b, be), formula = ljgap__bytes_u32(b, be);
+    uint32_t note = ljgap__bytes_u32(b, be), data_eunits = ljgap__bytes_u32(b, be);
     uint32_t dim_eunits[4], dim_labels[4];
     for (int i = 0; i < 4; i++)
-        dim_eunits[i] = ljgap_bytes_u32(b, be);
+        dim_eunits[i] = ljgap__bytes_u32(b, be);
     for (int i = 0; i < 4; i++)
-        dim_labels[i] = ljgap_bytes_u32(b, be);
-    ljgap_bytes_seek(b, BIN5 + 4);
-    w->created = ljgap_bytes_u32(b, be);
-    ljgap_bytes_seek(b, BIN5 + 12);
-    uint32_t npnts = ljgap_bytes_u32(b, be);
-    w->type = ljgap_bytes_u16(b, be);
-    const unsigned char *p = ljgap_bytes_at(b, BIN5 + 28, 32);
+        dim_labels[i] = ljgap__bytes_u32(b, be);
+    ljgap__bytes_seek(b, BIN5 + 4);
+    w->created = ljgap__bytes_u32(b, be);
+    ljgap__bytes_seek(b, BIN5 + 12);
+    uint32_t npnts = ljgap__bytes_u32(b, be);
+    w->type = ljgap__bytes_u16(b, be);
+    const unsigned char *p = ljgap__bytes_at(b, BIN5 + 28, 32);
     if (p) field(p, 32, w->name, sizeof w->name);
-    ljgap_bytes_seek(b, BIN5 + 68);
+    ljgap__bytes_seek(b, BIN5 + 68);
     uint32_t ndim[4];
     for (int i = 0; i < 4; i++)
-        ndim[i] = ljgap_bytes_u32(b, be);
+        ndim[i] = ljgap__bytes_u32(b, be);
     for (int i = 0; i < 2; i++)
-        w->step[i] = ljgap_bytes_f64(b, be);
-    if ((p = ljgap_bytes_at(b, BIN5 + 148, 4))) field(p, 4, w->data_unit, sizeof w->data_unit);
+        w->step[i] = ljgap__bytes_f64(b, be);
+    if ((p = ljgap__bytes_at(b, BIN5 + 148, 4))) field(p, 4, w->data_unit, sizeof w->data_unit);
     for (int i = 0; i < 2; i++)
-        if ((p = ljgap_bytes_at(b, BIN5 + 152 + 4 * i, 4)))
+        if ((p = ljgap__bytes_at(b, BIN5 + 152 + 4 * i, 4)))
             field(p, 4, w->dim_unit[i], sizeof w->dim_unit[i]);
     if (b->bad) return bad(err, (long)b->where, "the headers are truncated");
 
@@ -373,37 +373,37 @@ static int read_v5(ljgap_bytes *b, wave *w, ljgap_files_err *err)
                        "the file ends inside a section of %llu bytes at offset %llu",
                        (unsigned long long)sizes[i], (unsigned long long)start[i]);
     }
-    if (note) w->note = ljgap_bytes_at(b, start[1], note), w->note_len = note;
+    if (note) w->note = ljgap__bytes_at(b, start[1], note), w->note_len = note;
     if (data_eunits)
-        field(ljgap_bytes_at(b, start[2], data_eunits), data_eunits, w->data_unit,
+        field(ljgap__bytes_at(b, start[2], data_eunits), data_eunits, w->data_unit,
               sizeof w->data_unit);
     for (int i = 0; i < 2; i++)
         if (dim_eunits[i])
-            field(ljgap_bytes_at(b, start[3 + i], dim_eunits[i]), dim_eunits[i], w->dim_unit[i],
+            field(ljgap__bytes_at(b, start[3 + i], dim_eunits[i]), dim_eunits[i], w->dim_unit[i],
                   sizeof w->dim_unit[i]);
     if (dim_labels[2])
-        w->labels = ljgap_bytes_at(b, start[9], dim_labels[2]), w->nlabels = dim_labels[2] / LABEL;
+        w->labels = ljgap__bytes_at(b, start[9], dim_labels[2]), w->nlabels = dim_labels[2] / LABEL;
     return 0;
 }
 
 /* Reads the headers of a version 1-3 wave (one dimension). */
-static int read_v2(ljgap_bytes *b, wave *w, ljgap_files_err *err)
+static int read_v2(ljgap__bytes *b, wave *w, ljgap__files_err *err)
 {
     int be = w->be;
     size_t bh = bin_size(w->version), wh = bh;
-    ljgap_bytes_seek(b, 2);
-    uint32_t wfm = ljgap_bytes_u32(b, be), note = w->version >= 2 ? ljgap_bytes_u32(b, be) : 0;
-    w->type = (ljgap_bytes_seek(b, wh), ljgap_bytes_u16(b, be));
-    const unsigned char *p = ljgap_bytes_at(b, wh + 6, 20);
+    ljgap__bytes_seek(b, 2);
+    uint32_t wfm = ljgap__bytes_u32(b, be), note = w->version >= 2 ? ljgap__bytes_u32(b, be) : 0;
+    w->type = (ljgap__bytes_seek(b, wh), ljgap__bytes_u16(b, be));
+    const unsigned char *p = ljgap__bytes_at(b, wh + 6, 20);
     if (p) field(p, 20, w->name, sizeof w->name);
-    if ((p = ljgap_bytes_at(b, wh + 34, 4))) field(p, 4, w->data_unit, sizeof w->data_unit);
-    if ((p = ljgap_bytes_at(b, wh + 38, 4))) field(p, 4, w->dim_unit[0], sizeof w->dim_unit[0]);
-    ljgap_bytes_seek(b, wh + 42);
-    uint32_t npnts = ljgap_bytes_u32(b, be);
-    ljgap_bytes_seek(b, wh + 48);
-    w->step[0] = ljgap_bytes_f64(b, be);
-    ljgap_bytes_seek(b, wh + 96);
-    w->created = w->version > 1 ? ljgap_bytes_u32(b, be) : 0;
+    if ((p = ljgap__bytes_at(b, wh + 34, 4))) field(p, 4, w->data_unit, sizeof w->data_unit);
+    if ((p = ljgap__bytes_at(b, wh + 38, 4))) field(p, 4, w->dim_unit[0], sizeof w->dim_unit[0]);
+    ljgap__bytes_seek(b, wh + 42);
+    uint32_t npnts = ljgap__bytes_u32(b, be);
+    ljgap__bytes_seek(b, wh + 48);
+    w->step[0] = ljgap__bytes_f64(b, be);
+    ljgap__bytes_seek(b, wh + 96);
+    w->created = w->version > 1 ? ljgap__bytes_u32(b, be) : 0;
     if (b->bad) return bad(err, (long)b->where, "the headers are truncated");
     size_t ts = type_size(w->type);
     if (!ts) return bad(err, (long)wh, "unsupported wave type 0x%x (text or complex)", w->type);
@@ -420,7 +420,7 @@ static int read_v2(ljgap_bytes *b, wave *w, ljgap_files_err *err)
     uint64_t at = (uint64_t)bh + wfm;
     if (at > b->len) return bad(err, (long)b->len, "the file ends inside the data");
     if (at + note > b->len) return bad(err, (long)b->len, "the file ends inside the note");
-    if (note) w->note = ljgap_bytes_at(b, at, note), w->note_len = note;
+    if (note) w->note = ljgap__bytes_at(b, at, note), w->note_len = note;
     return 0;
 }
 
@@ -452,12 +452,12 @@ static void unit_key(const char *title, char *key, size_t size)
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
-                     ljgap_files_map *map, ljgap_files_err *err)
+                     ljgap__files_map *map, ljgap__files_err *err)
 {
     memset(map, 0, sizeof *map);
     map->format = NAME;
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     wave w;
     memset(&w, 0, sizeof w);
     w.version = version_of(buf, len, &w.be);
@@ -522,7 +522,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     map->z = malloc(map->nx * map->ny * sizeof *map->z);
     if (!map->z) return LJGAP_FILES_NOMEM;
     size_t ts = type_size(w.type), layer = map->nx * map->ny;
-    ljgap_bytes_seek(&b, w.data + (size_t)ch * layer * ts);
+    ljgap__bytes_seek(&b, w.data + (size_t)ch * layer * ts);
     for (size_t j = 0; j < map->ny; j++) {
         double *row = map->z + (map->ny - 1 - j) * map->nx;
         for (size_t i = 0; i < map->nx; i++) {
@@ -542,8 +542,8 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 
 /* The reader: read_file, with a fault's offset kept inside the file (a length or an offset
  * read from a header may point past its end: the fault is then where the file ends). */
-static int ibw_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int ibw_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
     err->offset = -1;
     int rc = read_file(buf, len, channel, map, err);
@@ -551,7 +551,7 @@ static int ibw_read(const unsigned char *buf, size_t len, const char *channel, l
     return rc;
 }
 
-const ljgap_files_format ljgap_files_ibw = {
+const ljgap__files_format ljgap__files_ibw = {
     .name = NAME,
     .extensions = ".ibw",
     .media_type = "application/x-igor-binary-wave",

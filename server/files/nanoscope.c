@@ -50,7 +50,7 @@ static int probe(const unsigned char *buf, size_t len)
 }
 
 /* The header's lines up to "\*File list end"; a section's line has key "*Name" and no value. */
-static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap_files_err *err)
+static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap__files_err *err)
 {
     size_t p = 0;
     int section = -1;
@@ -66,12 +66,12 @@ static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap_f
             n--;
         if (n == 0) continue;
         if (s[0] != '\\')
-            return ljgap_files_fail(err, NAME, (long)at, NULL,
+            return ljgap__files_fail(err, NAME, (long)at, NULL,
                                     "a header line does not start with a backslash");
         if (n < 2) continue; /* a lone backslash says nothing */
         if (n >= 15 && memcmp(s, "\\*File list end", 15) == 0) return 0;
         if (h->n >= MAX_LINES)
-            return ljgap_files_fail(err, NAME, (long)at, NULL, "more than %d header lines",
+            return ljgap__files_fail(err, NAME, (long)at, NULL, "more than %d header lines",
                                     MAX_LINES);
         line *L = &h->l[h->n];
         L->key = s + 1;
@@ -95,7 +95,7 @@ static int parse_header(const unsigned char *buf, size_t len, header *h, ljgap_f
         L->section = section;
         h->n++;
     }
-    return ljgap_files_fail(err, NAME, (long)len, NULL,
+    return ljgap__files_fail(err, NAME, (long)len, NULL,
                             "the header ends before its last line \\*File list end (truncated)");
 }
 
@@ -179,7 +179,7 @@ static void iso_date(const char *v, char *out, size_t size)
                 snprintf(out, size, "%04d-%02d-%02dT%02d:%02d:%02d", y, m + 1, d, H, M, S);
                 return;
             }
-    ljgap_files_text(out, size, v, strlen(v));
+    ljgap__files_text(out, size, v, strlen(v));
 }
 
 /* The title of image section sec: the quoted name of "Image Data", else its bracket. */
@@ -195,23 +195,23 @@ static void image_title(const header *h, int sec, char *out, size_t size)
     char *q = strchr(v, '"'), *b = strchr(v, '[');
     if (q && strchr(q + 1, '"')) {
         *strchr(q + 1, '"') = '\0';
-        ljgap_files_text(out, size, q + 1, strlen(q + 1));
+        ljgap__files_text(out, size, q + 1, strlen(q + 1));
     } else if (b && strchr(b + 1, ']')) {
         *strchr(b + 1, ']') = '\0';
-        ljgap_files_text(out, size, b + 1, strlen(b + 1));
+        ljgap__files_text(out, size, b + 1, strlen(b + 1));
     } else {
-        ljgap_files_text(out, size, v, strlen(v));
+        ljgap__files_text(out, size, v, strlen(v));
     }
 }
 
 /* The Z scale of image section sec: the factor from a raw integer to the channel's unit. */
-static int z_scale(const header *h, int sec, int bpp, ljgap_files_map *map, double *q,
-                   ljgap_files_err *err)
+static int z_scale(const header *h, int sec, int bpp, ljgap__files_map *map, double *q,
+                   ljgap__files_err *err)
 {
     const line *L = find(h, sec, "Z scale");
     char v[200], quantity[80] = "", hard_unit[16] = "", unit[40];
     double hard = NAN, lsb = NAN;
-    if (!L) return ljgap_files_fail(err, NAME, -1, NULL, "an image without its \\@2:Z scale");
+    if (!L) return ljgap__files_fail(err, NAME, -1, NULL, "an image without its \\@2:Z scale");
     value(L, v, sizeof v);
     char *p = v;
     if (*p == 'V' && p[1] == ' ') p += 2;
@@ -229,7 +229,7 @@ static int z_scale(const header *h, int sec, int bpp, ljgap_files_map *map, doub
     }
     if (sscanf(p, "%lf %15s", &hard, hard_unit) < 2) {
         if (!isfinite(lsb))
-            return ljgap_files_fail(err, NAME, (long)L->where, NULL,
+            return ljgap__files_fail(err, NAME, (long)L->where, NULL,
                                     "the Z scale \"%.60s\" has no value", v);
         hard = lsb * 65536;
         snprintf(hard_unit, sizeof hard_unit, "V");
@@ -239,23 +239,23 @@ static int z_scale(const header *h, int sec, int bpp, ljgap_files_map *map, doub
     double soft = 1;
     snprintf(unit, sizeof unit, "%s", hard_unit);
     if (quantity[0] && !(soft = sensitivity(h, quantity, unit, sizeof unit, hard_unit)))
-        return ljgap_files_fail(err, NAME, (long)L->where, NULL,
+        return ljgap__files_fail(err, NAME, (long)L->where, NULL,
                                 "the Z scale names the sensitivity [%.40s], which the header "
                                 "does not give as V <number> <unit>/%s",
                                 quantity, hard_unit);
     if (!isfinite(hard) || !isfinite(soft))
-        return ljgap_files_fail(err, NAME, (long)L->where, NULL, "the Z scale is not a number");
-    double to_m = ljgap_files_unit_scale(unit);
-    ljgap_files_text(map->z_unit, sizeof map->z_unit, unit, strlen(unit));
+        return ljgap__files_fail(err, NAME, (long)L->where, NULL, "the Z scale is not a number");
+    double to_m = ljgap__files_unit_scale(unit);
+    ljgap__files_text(map->z_unit, sizeof map->z_unit, unit, strlen(unit));
     *q = hard * soft * (to_m > 0 ? to_m : 1);
     if (!isfinite(*q * 2147483648.0))
-        return ljgap_files_fail(err, NAME, (long)L->where, NULL,
+        return ljgap__files_fail(err, NAME, (long)L->where, NULL,
                                 "the Z scale times its sensitivity, %g, overflows", *q);
     return 0;
 }
 
 /* "\Scan Size: 500 500 nm" (or one number: square pixels) in metres. */
-static void scan_size(const header *h, int sec, ljgap_files_map *map)
+static void scan_size(const header *h, int sec, ljgap__files_map *map)
 {
     const line *L = find(h, sec, "Scan Size");
     char v[100], u1[24] = "", u2[24] = "";
@@ -268,13 +268,13 @@ static void scan_size(const header *h, int sec, ljgap_files_map *map)
     } else {
         y = x * (double)map->ny / (double)map->nx;
     }
-    double s = ljgap_files_unit_scale(u1);
+    double s = ljgap__files_unit_scale(u1);
     if (s > 0 && isfinite(x) && isfinite(y) && x > 0 && y > 0)
         map->size_x = x * s, map->size_y = y * s;
 }
 
 static int read_nanoscope(const unsigned char *buf, size_t len, const char *channel,
-                          ljgap_files_map *map, ljgap_files_err *err)
+                          ljgap__files_map *map, ljgap__files_err *err)
 {
     header h = {0};
     int images[LJGAP_FILES_MAX_CHANNELS], n_img = 0, st, pick;
@@ -285,11 +285,11 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
         if (is_section(&h, i, "Ciao image list") && n_img < LJGAP_FILES_MAX_CHANNELS) {
             images[n_img++] = i;
             image_title(&h, i, v, sizeof v);
-            ljgap_files_add_channel(map, v);
+            ljgap__files_add_channel(map, v);
         }
     if (!n_img) {
         st =
-            ljgap_files_fail(err, NAME, -1, NULL, "the header lists no image (\\*Ciao image list)");
+            ljgap__files_fail(err, NAME, -1, NULL, "the header lists no image (\\*Ciao image list)");
         goto end;
     }
     /* a file cut short is bad even where it cuts a channel not asked for */
@@ -299,13 +299,13 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
                   p = number(&h, images[i], "Bytes/pixel");
         if (o >= 0 && w > 0 && r > 0 && w <= 65536 && r <= 65536 &&
             (unsigned long long)o + (unsigned long long)(w * r * (p == 4 ? 4 : 2)) > len) {
-            st = ljgap_files_fail(err, NAME, (long)len, NULL,
+            st = ljgap__files_fail(err, NAME, (long)len, NULL,
                                   "image %d \"%s\" ends at byte %lld, the file has %zu (truncated)",
                                   i, map->channels[i], o + w * r * (p == 4 ? 4 : 2), len);
             goto end;
         }
     }
-    if ((pick = ljgap_files_channel_pick(map, channel, err)) < 0) {
+    if ((pick = ljgap__files_channel_pick(map, channel, err)) < 0) {
         st = LJGAP_FILES_CHANNEL;
         goto end;
     }
@@ -316,7 +316,7 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
               bpp = number(&h, sec, "Bytes/pixel"), nx = number(&h, sec, "Samps/line"),
               ny = number(&h, sec, "Number of lines");
     if (off < 0 || dlen < 0 || nx <= 0 || ny <= 0) {
-        st = ljgap_files_fail(err, NAME, (long)h.l[sec].where, NULL,
+        st = ljgap__files_fail(err, NAME, (long)h.l[sec].where, NULL,
                               "image \"%s\" lacks its Data offset, Data length, Samps/line or "
                               "Number of lines",
                               map->channel);
@@ -324,35 +324,35 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
     }
     if (bpp < 0) bpp = 2;
     if (bpp != 2 && bpp != 4) {
-        st = ljgap_files_fail(err, NAME, (long)h.l[sec].where, NULL,
+        st = ljgap__files_fail(err, NAME, (long)h.l[sec].where, NULL,
                               "%lld bytes a pixel: only 2 and 4 are read", bpp);
         goto end;
     }
     if (nx > 65536 || ny > 65536 || nx * ny * bpp > dlen) {
-        st = ljgap_files_fail(err, NAME, (long)h.l[sec].where, NULL,
+        st = ljgap__files_fail(err, NAME, (long)h.l[sec].where, NULL,
                               "%lld x %lld pixels of %lld bytes do not fit the Data length %lld",
                               nx, ny, bpp, dlen);
         goto end;
     }
-    if ((st = ljgap_files_alloc(map, (size_t)nx, (size_t)ny, err))) goto end;
+    if ((st = ljgap__files_alloc(map, (size_t)nx, (size_t)ny, err))) goto end;
     double q = 1;
     if ((st = z_scale(&h, sec, (int)bpp, map, &q, err))) goto end;
     scan_size(&h, sec, map);
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     size_t need = (size_t)(nx * ny * bpp);
-    if (!ljgap_bytes_at(&b, (size_t)off, need)) {
-        st = ljgap_files_fail(err, NAME, (long)len, NULL,
+    if (!ljgap__bytes_at(&b, (size_t)off, need)) {
+        st = ljgap__files_fail(err, NAME, (long)len, NULL,
                               "image \"%s\" needs bytes %lld to %lld, the file has %zu (truncated)",
                               map->channel, off, off + (long long)need, len);
         goto end;
     }
-    ljgap_bytes_seek(&b, (size_t)off);
+    ljgap__bytes_seek(&b, (size_t)off);
     for (long long j = 0; j < ny; j++) {
         double *row = map->z + (size_t)(ny - 1 - j) * (size_t)nx;
         for (long long i = 0; i < nx; i++)
             row[i] =
-                q * (bpp == 2 ? (double)ljgap_bytes_i16(&b, 0) : (double)ljgap_bytes_i32(&b, 0));
+                q * (bpp == 2 ? (double)ljgap__bytes_i16(&b, 0) : (double)ljgap__bytes_i32(&b, 0));
     }
     if ((L = find(&h, -2, "Date"))) {
         value(L, v, sizeof v);
@@ -361,12 +361,12 @@ static int read_nanoscope(const unsigned char *buf, size_t len, const char *chan
     if ((L = find(&h, -2, "Microscope")) || (L = find(&h, -2, "Description"))) {
         value(L, v, sizeof v);
         snprintf(map->instrument, sizeof map->instrument, "Bruker ");
-        ljgap_files_text(map->instrument + 7, sizeof map->instrument - 7, v, strlen(v));
+        ljgap__files_text(map->instrument + 7, sizeof map->instrument - 7, v, strlen(v));
     }
 end:
     free(h.l);
     return st;
 }
 
-const ljgap_files_format ljgap_files_nanoscope = {NAME, ".spm .000 .001 .di", NULL, probe,
+const ljgap__files_format ljgap__files_nanoscope = {NAME, ".spm .000 .001 .di", NULL, probe,
                                                   read_nanoscope};

@@ -45,7 +45,7 @@ typedef struct {
 } nc_var;
 
 typedef struct {
-    ljgap_bytes b;              /* the cursor */
+    ljgap__bytes b;              /* the cursor */
     int version;                /* 1, 2 (64-bit offsets) or 5 (64-bit data) */
     size_t ndims;               /* dimensions */
     uint64_t dimlen[MAX_DIMS];  /* their lengths (0: the record dimension) */
@@ -70,14 +70,14 @@ static size_t type_size(int t)
 /* A count: 32 bits, 64 in CDF-5. */
 static uint64_t rd_n(nc_file *f)
 {
-    return f->version == 5 ? ljgap_bytes_u64(&f->b, 1) : ljgap_bytes_u32(&f->b, 1);
+    return f->version == 5 ? ljgap__bytes_u64(&f->b, 1) : ljgap__bytes_u32(&f->b, 1);
 }
 
 /* Skips to the next multiple of 4. */
 static void rd_pad(nc_file *f)
 {
     size_t p = f->b.pos;
-    if (p % 4) ljgap_bytes_seek(&f->b, p + 4 - p % 4);
+    if (p % 4) ljgap__bytes_seek(&f->b, p + 4 - p % 4);
 }
 
 /* A name: its length, its bytes, padding; the first size - 1 bytes kept in out. */
@@ -89,37 +89,37 @@ static void rd_name(nc_file *f, char *out, size_t size)
         out[0] = 0;
         return;
     }
-    ljgap_bytes_str(&f->b, (size_t)n, out, size);
+    ljgap__bytes_str(&f->b, (size_t)n, out, size);
     rd_pad(f);
 }
 
 /* One value of type t at offset at, as a double (b.bad set when out of the buffer). */
-static double value_at(ljgap_bytes *b, int t, size_t at)
+static double value_at(ljgap__bytes *b, int t, size_t at)
 {
-    if (ljgap_bytes_seek(b, at)) return 0;
+    if (ljgap__bytes_seek(b, at)) return 0;
     switch (t) {
     case 1:
-        return (int8_t)ljgap_bytes_u8(b);
+        return (int8_t)ljgap__bytes_u8(b);
     case 2:
-        return ljgap_bytes_u8(b);
+        return ljgap__bytes_u8(b);
     case 3:
-        return ljgap_bytes_i16(b, 1);
+        return ljgap__bytes_i16(b, 1);
     case 4:
-        return ljgap_bytes_i32(b, 1);
+        return ljgap__bytes_i32(b, 1);
     case 5:
-        return ljgap_bytes_f32(b, 1);
+        return ljgap__bytes_f32(b, 1);
     case 6:
-        return ljgap_bytes_f64(b, 1);
+        return ljgap__bytes_f64(b, 1);
     case 7:
-        return ljgap_bytes_u8(b);
+        return ljgap__bytes_u8(b);
     case 8:
-        return ljgap_bytes_u16(b, 1);
+        return ljgap__bytes_u16(b, 1);
     case 9:
-        return ljgap_bytes_u32(b, 1);
+        return ljgap__bytes_u32(b, 1);
     case 10:
-        return (double)(int64_t)ljgap_bytes_u64(b, 1);
+        return (double)(int64_t)ljgap__bytes_u64(b, 1);
     case 11:
-        return (double)ljgap_bytes_u64(b, 1);
+        return (double)ljgap__bytes_u64(b, 1);
     }
     return 0;
 }
@@ -137,28 +137,28 @@ static int att_str(nc_file *f, const nc_att *a, char *out, size_t size)
 {
     out[0] = 0;
     if (a->type != 2) return 0;
-    const unsigned char *p = ljgap_bytes_at(&f->b, a->at, (size_t)a->n);
+    const unsigned char *p = ljgap__bytes_at(&f->b, a->at, (size_t)a->n);
     if (!p) return 0;
-    ljgap_fb_text(p, (size_t)a->n, out, size);
+    ljgap__fb_text(p, (size_t)a->n, out, size);
     return 1;
 }
 
 /* An attribute list (tag, count, attributes); the ones named in `want` are stored. */
 static int rd_atts(nc_file *f, nc_var *var, nc_att *json)
 {
-    uint32_t tag = ljgap_bytes_u32(&f->b, 1);
+    uint32_t tag = ljgap__bytes_u32(&f->b, 1);
     uint64_t n = rd_n(f);
     if (tag == 0 && n == 0) return 0;
     if (tag != NC_ATTRIBUTE) return -1;
     for (uint64_t i = 0; i < n && !f->b.bad; i++) {
         char name[32];
         rd_name(f, name, sizeof name);
-        nc_att a = {(int)ljgap_bytes_u32(&f->b, 1), 0, 0};
+        nc_att a = {(int)ljgap__bytes_u32(&f->b, 1), 0, 0};
         a.n = rd_n(f);
         a.at = f->b.pos;
         size_t sz = type_size(a.type);
         if (!sz || a.n > (f->b.len - a.at) / sz) return -1;
-        ljgap_bytes_seek(&f->b, a.at + (size_t)a.n * sz);
+        ljgap__bytes_seek(&f->b, a.at + (size_t)a.n * sz);
         rd_pad(f);
         if (json && !strcmp(name, "json")) *json = a;
         if (!var) continue;
@@ -183,9 +183,9 @@ static int rd_atts(nc_file *f, nc_var *var, nc_att *json)
 /* The header: 0, or the byte offset of the fault + 1 (negated) on a bad header. */
 static long rd_header(nc_file *f)
 {
-    ljgap_bytes_seek(&f->b, 4);
+    ljgap__bytes_seek(&f->b, 4);
     (void)rd_n(f); /* numrecs */
-    uint32_t tag = ljgap_bytes_u32(&f->b, 1);
+    uint32_t tag = ljgap__bytes_u32(&f->b, 1);
     uint64_t n = rd_n(f);
     if (tag != NC_DIMENSION && !(tag == 0 && n == 0)) return (long)f->b.pos - 8;
     if (n > MAX_DIMS) return (long)f->b.pos - 4;
@@ -196,7 +196,7 @@ static long rd_header(nc_file *f)
     }
     if (rd_atts(f, NULL, &f->json)) return f->b.bad ? (long)f->b.where : (long)f->b.pos;
     size_t vat = f->b.pos;
-    tag = ljgap_bytes_u32(&f->b, 1);
+    tag = ljgap__bytes_u32(&f->b, 1);
     n = rd_n(f);
     if (tag != NC_VARIABLE && !(tag == 0 && n == 0)) return (long)vat;
     for (uint64_t i = 0; i < n && !f->b.bad; i++) {
@@ -221,10 +221,10 @@ static long rd_header(nc_file *f)
             count = l == 0 ? 0 : count > UINT64_MAX / 16 / l ? UINT64_MAX / 16 : count * l;
         }
         if (rd_atts(f, v, NULL)) return f->b.bad ? (long)f->b.where : (long)f->b.pos;
-        v->type = (int)ljgap_bytes_u32(&f->b, 1);
+        v->type = (int)ljgap__bytes_u32(&f->b, 1);
         if (!type_size(v->type) && !f->b.bad) return (long)f->b.pos - 4;
         (void)rd_n(f); /* vsize */
-        v->begin = f->version == 1 ? ljgap_bytes_u32(&f->b, 1) : ljgap_bytes_u64(&f->b, 1);
+        v->begin = f->version == 1 ? ljgap__bytes_u32(&f->b, 1) : ljgap__bytes_u64(&f->b, 1);
         uint64_t end = v->begin + count * type_size(v->type);
         if (count && v->begin <= UINT64_MAX / 2 && end > f->data_end) f->data_end = end;
     }
@@ -262,12 +262,12 @@ static const char *json_text(const char *js, const char *from, const char *key, 
 }
 
 /* acquisition_time, instrument name and tip radius from the json attribute. */
-static void read_info(nc_file *f, ljgap_files_map *map)
+static void read_info(nc_file *f, ljgap__files_map *map)
 {
     if (f->json.type != 2 || f->json.n == 0 || f->json.n > 65536) return;
     char *js = malloc((size_t)f->json.n + 1);
     if (!js) return;
-    const unsigned char *p = ljgap_bytes_at(&f->b, f->json.at, (size_t)f->json.n);
+    const unsigned char *p = ljgap__bytes_at(&f->b, f->json.at, (size_t)f->json.n);
     if (p) {
         memcpy(js, p, (size_t)f->json.n);
         js[f->json.n] = 0;
@@ -278,7 +278,7 @@ static void read_info(nc_file *f, ljgap_files_map *map)
         char val[40], unit[16];
         if (tip && json_text(js, tip, "value", val, sizeof val) &&
             json_text(js, tip, "unit", unit, sizeof unit)) {
-            double r = strtod(val, NULL) * ljgap_fb_length_unit(unit);
+            double r = strtod(val, NULL) * ljgap__fb_length_unit(unit);
             if (isfinite(r) && r > 0) map->tip_radius = r;
         }
     }
@@ -302,64 +302,64 @@ static double default_fill(int t)
     return t >= 1 && t <= 11 ? fill[t] : 0;
 }
 
-static int nc_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                   ljgap_files_err *err)
+static int nc_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                   ljgap__files_err *err)
 {
-    ljgap_fb_map_init(map, NC);
+    ljgap__fb_map_init(map, NC);
     if (len >= 8 && !memcmp(buf, "\x89HDF\r\n\x1a\n", 8))
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL,
                              "a netCDF-4 (HDF5) file: only the classic formats are read; save "
                              "as NETCDF3_64BIT_OFFSET (SurfaceTopography's default)");
     nc_file *f = calloc(1, sizeof *f);
-    if (!f) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, NC, -1, NULL, "out of memory");
-    ljgap_bytes_init(&f->b, buf, len);
+    if (!f) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, NC, -1, NULL, "out of memory");
+    ljgap__bytes_init(&f->b, buf, len);
     int rc = 0;
     if (len < 4 || memcmp(buf, "CDF", 3) || (buf[3] != 1 && buf[3] != 2 && buf[3] != 5)) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL, "no classic netCDF magic");
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL, "no classic netCDF magic");
         goto done;
     }
     f->version = buf[3];
     long bad = rd_header(f);
     if (bad > (long)len) bad = (long)len; /* a padding skipped past the end */
     if (bad >= 0) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, bad, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, bad, NULL,
                            "the netCDF header is %s at byte %ld",
                            f->b.bad ? "cut short" : "malformed", bad);
         goto done;
     }
     f->b.bad = 0;
     if (f->data_end > len) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
                            "the file is cut short at byte %zu: its variables reach byte %llu", len,
                            (unsigned long long)f->data_end);
         goto done;
     }
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "heights");
     map->n_channels = 1;
-    if (ljgap_fb_channel(map, channel, 0) != 0) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_CHANNEL, NC, -1, NULL,
+    if (ljgap__fb_channel(map, channel, 0) != 0) {
+        rc = ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, NC, -1, NULL,
                            "no channel \"%s\": the file has one, heights", channel);
         goto done;
     }
     snprintf(map->channel, sizeof map->channel, "heights");
     nc_var *h = &f->heights;
     if (!h->present) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL, "no variable named heights");
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL, "no variable named heights");
         goto done;
     }
     if (h->ndims < 1 || h->ndims > 2) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
                            "the variable heights has %d dimensions: 1 or 2 are read", h->ndims);
         goto done;
     }
     uint64_t n0 = f->dimlen[h->dimid[0]], n1 = h->ndims == 2 ? f->dimlen[h->dimid[1]] : 1;
     if (n0 == 0 || n1 == 0) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
                            "heights is a record (unlimited) variable or empty: not read");
         goto done;
     }
     if (!strcmp(f->dimname[h->dimid[0]], "n")) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
                            "a nonuniform line scan (dimension n): not read");
         goto done;
     }
@@ -368,13 +368,13 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
              !strcmp(f->dimname[h->dimid[1]], "x");
     size_t nx = (size_t)(yx ? n1 : n0), ny = (size_t)(yx ? n0 : n1);
     if (n0 > LJGAP_FILES_MAX_POINTS || n1 > LJGAP_FILES_MAX_POINTS) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, NC, -1, NULL, "%llu x %llu points",
+        rc = ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, NC, -1, NULL, "%llu x %llu points",
                            (unsigned long long)n0, (unsigned long long)n1);
         goto done;
     }
     size_t n = nx * ny, sz = type_size(h->type);
     if (h->begin > len || n > (len - h->begin) / sz) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
                            "the heights (%zu values from byte %llu) are cut short at byte %zu", n,
                            (unsigned long long)h->begin, len);
         goto done;
@@ -384,19 +384,19 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
                    type_size(f->mask.type);
     size_t msz = has_mask ? type_size(f->mask.type) : 0;
     if (has_mask && (f->mask.begin > len || n > (len - f->mask.begin) / msz)) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
                            "the mask (%zu values from byte %llu) is cut short at byte %zu", n,
                            (unsigned long long)f->mask.begin, len);
         goto done;
     }
-    rc = ljgap_fb_alloc(map, nx, ny, err, NC, -1);
+    rc = ljgap__fb_alloc(map, nx, ny, err, NC, -1);
     if (rc) goto done;
 
     /* units: heights:unit, else x:unit (SurfaceTopography keeps one unit for all) */
     char unit[32] = "";
     if (!att_str(f, &h->unit, unit, sizeof unit) || !unit[0])
         att_str(f, &f->x.unit, unit, sizeof unit);
-    double fz = ljgap_fb_length_unit(unit);
+    double fz = ljgap__fb_length_unit(unit);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", unit);
     double fill = default_fill(h->type), missing = 0, scale = 1, offset = 0;
     int has_fill = 1, has_missing = att_num(f, &h->missing, &missing);
@@ -411,16 +411,16 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
             if (has_mask && value_at(&f->b, f->mask.type, (size_t)f->mask.begin + k * msz) != 0)
                 hole = 1;
             v = (v * scale + offset) * (fz > 0 ? fz : 1);
-            ljgap_fb_put(map, j * nx + i, hole ? NAN : v);
+            ljgap__fb_put(map, j * nx + i, hole ? NAN : v);
         }
     if (f->b.bad) { /* not reached: the extents were checked */
-        rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, NC, (long)f->b.where, NULL, "data cut short");
+        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)f->b.where, NULL, "data cut short");
         goto done;
     }
     /* size: x:length and y:length in x's unit */
     char xunit[32] = "";
     if (!att_str(f, &f->x.unit, xunit, sizeof xunit)) snprintf(xunit, sizeof xunit, "%s", unit);
-    double fl = ljgap_fb_length_unit(xunit), lx = 0, ly = 0, per = 0;
+    double fl = ljgap__fb_length_unit(xunit), lx = 0, ly = 0, per = 0;
     if (fl > 0 && att_num(f, &f->x.length, &lx) && isfinite(lx) && lx > 0) {
         map->size_x = lx * fl;
         if (ny == 1)
@@ -437,7 +437,7 @@ done:
     return rc;
 }
 
-const ljgap_files_format ljgap_files_netcdf = {
+const ljgap__files_format ljgap__files_netcdf = {
     .name = "netcdf",
     .extensions = ".nc",
     .media_type = "application/netcdf",

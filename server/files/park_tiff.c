@@ -40,7 +40,7 @@
 #define PARK_V2 0x01000002u
 #define MAX_ENTRIES 4096 /* a directory longer than this is not a Park file's */
 
-static int bad(ljgap_files_err *err, long offset, const char *fmt, ...)
+static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -65,10 +65,10 @@ static const unsigned tag_ids[T_N] = {271, 272, 306, 50432, 50433, 50434, 50435}
 
 /* Walks the first directory: 0, or -1 with *where the offset of the fault (not a TIFF, a
  * directory or a value outside the file). Values are located, not read. */
-static int tiff_walk(ljgap_bytes *b, int *be, tiff_tag tags[T_N], size_t *where)
+static int tiff_walk(ljgap__bytes *b, int *be, tiff_tag tags[T_N], size_t *where)
 {
     static const unsigned type_size[] = {0, 1, 1, 2, 4, 8, 1, 1, 2, 4, 8, 4, 8};
-    const unsigned char *h = ljgap_bytes_at(b, 0, 8);
+    const unsigned char *h = ljgap__bytes_at(b, 0, 8);
     memset(tags, 0, T_N * sizeof *tags);
     *where = 0;
     if (!h) return -1;
@@ -78,27 +78,27 @@ static int tiff_walk(ljgap_bytes *b, int *be, tiff_tag tags[T_N], size_t *where)
         *be = 1;
     else
         return -1;
-    ljgap_bytes_seek(b, 4);
-    size_t ifd = ljgap_bytes_u32(b, *be);
-    ljgap_bytes_seek(b, ifd);
-    unsigned n = ljgap_bytes_u16(b, *be);
-    if (b->bad || n > MAX_ENTRIES || !ljgap_bytes_has(b, ifd + 2, (size_t)n * 12 + 4)) {
+    ljgap__bytes_seek(b, 4);
+    size_t ifd = ljgap__bytes_u32(b, *be);
+    ljgap__bytes_seek(b, ifd);
+    unsigned n = ljgap__bytes_u16(b, *be);
+    if (b->bad || n > MAX_ENTRIES || !ljgap__bytes_has(b, ifd + 2, (size_t)n * 12 + 4)) {
         *where = b->bad ? b->where : ifd;
         return -1;
     }
     for (unsigned i = 0; i < n; i++) {
         size_t e = ifd + 2 + (size_t)i * 12;
-        ljgap_bytes_seek(b, e);
-        unsigned id = ljgap_bytes_u16(b, *be), type = ljgap_bytes_u16(b, *be);
-        uint32_t count = ljgap_bytes_u32(b, *be);
+        ljgap__bytes_seek(b, e);
+        unsigned id = ljgap__bytes_u16(b, *be), type = ljgap__bytes_u16(b, *be);
+        uint32_t count = ljgap__bytes_u32(b, *be);
         for (int t = 0; t < T_N; t++) {
             if (id != tag_ids[t]) continue;
             unsigned ts = type < sizeof type_size / sizeof type_size[0] ? type_size[type] : 0;
             tiff_tag *g = &tags[t];
             g->found = 1, g->type = type, g->count = count, g->entry = e;
             g->len = (size_t)count * (ts ? ts : 1);
-            g->at = g->len <= 4 ? e + 8 : ljgap_bytes_u32(b, *be);
-            if (!ts || !ljgap_bytes_has(b, g->at, g->len)) {
+            g->at = g->len <= 4 ? e + 8 : ljgap__bytes_u32(b, *be);
+            if (!ts || !ljgap__bytes_has(b, g->at, g->len)) {
                 *where = ts ? g->at : e;
                 return -1;
             }
@@ -108,17 +108,17 @@ static int tiff_walk(ljgap_bytes *b, int *be, tiff_tag tags[T_N], size_t *where)
 }
 
 /* A SHORT or LONG tag's single value, or ~0u. */
-static uint32_t tag_uint(ljgap_bytes *b, const tiff_tag *g, int be)
+static uint32_t tag_uint(ljgap__bytes *b, const tiff_tag *g, int be)
 {
     if (!g->found || g->count != 1 || (g->type != 3 && g->type != 4)) return ~0u;
-    ljgap_bytes_seek(b, g->at);
-    return g->type == 3 ? ljgap_bytes_u16(b, be) : ljgap_bytes_u32(b, be);
+    ljgap__bytes_seek(b, g->at);
+    return g->type == 3 ? ljgap__bytes_u16(b, be) : ljgap__bytes_u32(b, be);
 }
 
 static int park_probe(const unsigned char *buf, size_t len)
 {
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     tiff_tag tags[T_N];
     int be;
     size_t where;
@@ -196,20 +196,20 @@ static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
 }
 
 /* An ASCII tag's text (empty when the tag is absent or of another type). */
-static void tag_text(ljgap_bytes *b, const tiff_tag *g, char *out, size_t size)
+static void tag_text(ljgap__bytes *b, const tiff_tag *g, char *out, size_t size)
 {
-    const unsigned char *p = g->found && g->type == 2 ? ljgap_bytes_at(b, g->at, g->len) : NULL;
+    const unsigned char *p = g->found && g->type == 2 ? ljgap__bytes_at(b, g->at, g->len) : NULL;
     out[0] = 0;
     if (p) text_copy(p, g->len, out, size);
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
-                     ljgap_files_map *map, ljgap_files_err *err)
+                     ljgap__files_map *map, ljgap__files_err *err)
 {
     memset(map, 0, sizeof *map);
     map->format = NAME;
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     tiff_tag tags[T_N];
     int be;
     size_t where;
@@ -232,17 +232,17 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 
     /* the image header (little endian whatever the TIFF's order) */
     size_t h = th->at;
-    ljgap_bytes_seek(&b, h);
-    uint32_t image_type = ljgap_bytes_u32(&b, 0);
-    ljgap_bytes_seek(&b, h + 100);
-    uint32_t xres = ljgap_bytes_u32(&b, 0), yres = ljgap_bytes_u32(&b, 0);
-    ljgap_bytes_seek(&b, h + 140);
-    double xreal = ljgap_bytes_f64(&b, 0), yreal = ljgap_bytes_f64(&b, 0);
-    ljgap_bytes_seek(&b, h + 220);
-    double gain = ljgap_bytes_f64(&b, 0), zscale = ljgap_bytes_f64(&b, 0);
-    double zoff = ljgap_bytes_f64(&b, 0);
+    ljgap__bytes_seek(&b, h);
+    uint32_t image_type = ljgap__bytes_u32(&b, 0);
+    ljgap__bytes_seek(&b, h + 100);
+    uint32_t xres = ljgap__bytes_u32(&b, 0), yres = ljgap__bytes_u32(&b, 0);
+    ljgap__bytes_seek(&b, h + 140);
+    double xreal = ljgap__bytes_f64(&b, 0), yreal = ljgap__bytes_f64(&b, 0);
+    ljgap__bytes_seek(&b, h + 220);
+    double gain = ljgap__bytes_f64(&b, 0), zscale = ljgap__bytes_f64(&b, 0);
+    double zoff = ljgap__bytes_f64(&b, 0);
     uint32_t dtype = 0;
-    if (version == PARK_V2) ljgap_bytes_seek(&b, h + 348), dtype = ljgap_bytes_u32(&b, 0);
+    if (version == PARK_V2) ljgap__bytes_seek(&b, h + 348), dtype = ljgap__bytes_u32(&b, 0);
     if (b.bad) return bad(err, (long)b.where, "the image header is truncated");
     if (image_type != 0)
         return bad(err, (long)h, "image type %u is a line profile or spectroscopy, not a map",
@@ -265,7 +265,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 
     /* texts: the channel, the unit, the instrument, the date */
     char title[LJGAP_FILES_TEXT], unit[32];
-    const unsigned char *tp = ljgap_bytes_at(&b, h + 4, 64), *up = ljgap_bytes_at(&b, h + 244, 16);
+    const unsigned char *tp = ljgap__bytes_at(&b, h + 4, 64), *up = ljgap__bytes_at(&b, h + 244, 16);
     if (!tp || !up) return bad(err, (long)b.where, "the image header is truncated");
     utf16(tp, 32, title, sizeof title);
     utf16(up, 8, unit, sizeof unit);
@@ -302,13 +302,13 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     if (!map->z) return LJGAP_FILES_NOMEM;
     map->nx = xres, map->ny = yres, map->size_x = isfinite(sx) ? sx : 0;
     map->size_y = isfinite(sy) ? sy : 0;
-    ljgap_bytes_seek(&b, td->at);
+    ljgap__bytes_seek(&b, td->at);
     for (size_t j = 0; j < yres; j++) {
         double *row = map->z + (yres - 1 - j) * (size_t)xres; /* bottom row first */
         for (size_t i = 0; i < xres; i++) {
-            double raw = dtype == 0   ? ljgap_bytes_i16(&b, 0)
-                         : dtype == 1 ? ljgap_bytes_i32(&b, 0)
-                                      : ljgap_bytes_f32(&b, 0);
+            double raw = dtype == 0   ? ljgap__bytes_i16(&b, 0)
+                         : dtype == 1 ? ljgap__bytes_i32(&b, 0)
+                                      : ljgap__bytes_f32(&b, 0);
             double z = q * (raw * zscale + zoff);
             if (isfinite(z))
                 row[i] = z;
@@ -326,7 +326,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 /* The reader: read_file, with a fault's offset kept inside the file (a length or an offset
  * read from a header may point past its end: the fault is then where the file ends). */
 static int park_read(const unsigned char *buf, size_t len, const char *channel,
-                     ljgap_files_map *map, ljgap_files_err *err)
+                     ljgap__files_map *map, ljgap__files_err *err)
 {
     err->offset = -1;
     int rc = read_file(buf, len, channel, map, err);
@@ -334,7 +334,7 @@ static int park_read(const unsigned char *buf, size_t len, const char *channel,
     return rc;
 }
 
-const ljgap_files_format ljgap_files_park_tiff = {
+const ljgap__files_format ljgap__files_park_tiff = {
     .name = NAME,
     .extensions = ".tiff .tif",
     .media_type = NULL, /* image/tiff would claim every TIFF */

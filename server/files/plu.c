@@ -35,7 +35,7 @@
 #define HEADER 500
 #define NO_DATA 1000001.0f
 
-static int bad(ljgap_files_err *err, long offset, const char *fmt, ...)
+static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -53,9 +53,9 @@ static int ctime_date(const unsigned char *buf, size_t len, char *iso, size_t si
     static const char months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
     char s[25], wd[4], mon[4];
     int day, h, m, sec, y, n = 0;
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    const unsigned char *p = ljgap_bytes_at(&b, 0, 25);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    const unsigned char *p = ljgap__bytes_at(&b, 0, 25);
     if (!p || p[24] != 0) return 0;
     memcpy(s, p, 25);
     if (sscanf(s, "%3s %3s %2d %2d:%2d:%2d %4d%n", wd, mon, &day, &h, &m, &sec, &y, &n) != 7 ||
@@ -91,7 +91,7 @@ static int pick_channel(const char *channel, char titles[][LJGAP_FILES_TEXT], in
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
-                     ljgap_files_map *map, ljgap_files_err *err)
+                     ljgap__files_map *map, ljgap__files_err *err)
 {
     static const char *const hardware[] = {"PLu", "PLu 2300 XGA", "PLu 2300 XGA T5",
                                            "PLu 2300 SXGA", "PLu 3300"};
@@ -99,15 +99,15 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     map->format = NAME;
     if (!ctime_date(buf, len, map->acquired, sizeof map->acquired))
         return bad(err, 0, "the file does not start with a date (Sensofar PLu)");
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    ljgap_bytes_seek(&b, 404);
-    float mppx = ljgap_bytes_f32(&b, 0), mppy = ljgap_bytes_f32(&b, 0);
-    ljgap_bytes_seek(&b, 428);
-    uint32_t type = ljgap_bytes_u32(&b, 0);
-    ljgap_bytes_seek(&b, 489);
-    unsigned layers = ljgap_bytes_u8(&b), version = ljgap_bytes_u8(&b), hw = ljgap_bytes_u8(&b);
-    ljgap_bytes_seek(&b, HEADER);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    ljgap__bytes_seek(&b, 404);
+    float mppx = ljgap__bytes_f32(&b, 0), mppy = ljgap__bytes_f32(&b, 0);
+    ljgap__bytes_seek(&b, 428);
+    uint32_t type = ljgap__bytes_u32(&b, 0);
+    ljgap__bytes_seek(&b, 489);
+    unsigned layers = ljgap__bytes_u8(&b), version = ljgap__bytes_u8(&b), hw = ljgap__bytes_u8(&b);
+    ljgap__bytes_seek(&b, HEADER);
     if (b.bad) return bad(err, (long)b.where, "the header is truncated (500 bytes)");
     if (type != 0 && type != 1 && type != 3 && type != 5)
         return bad(err, 428,
@@ -139,7 +139,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     size_t data = 0;
     for (unsigned c = 0; c < layers; c++) {
         size_t at = b.pos;
-        uint32_t ny = ljgap_bytes_u32(&b, 0), nx = ljgap_bytes_u32(&b, 0);
+        uint32_t ny = ljgap__bytes_u32(&b, 0), nx = ljgap__bytes_u32(&b, 0);
         if (b.bad) return bad(err, (long)b.where, "the file ends before layer %u's sizes", c);
         if (nx == 0 || ny == 0) return bad(err, (long)at, "layer %u has %u x %u points", c, ny, nx);
         if ((uint64_t)nx * ny > LJGAP_FILES_MAX_POINTS) {
@@ -148,19 +148,19 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
             return LJGAP_FILES_TOOBIG;
         }
         uint64_t bytes = (uint64_t)nx * ny * 4;
-        if (!ljgap_bytes_has(&b, b.pos, bytes))
+        if (!ljgap__bytes_has(&b, b.pos, bytes))
             return bad(err, (long)len, "the file ends inside layer %u (%u x %u heights at %zu)", c,
                        ny, nx, b.pos);
         if (c == (unsigned)ch) yres = ny, xres = nx, data = b.pos;
-        if (c + 1 < layers && ljgap_bytes_seek(&b, b.pos + bytes + 8))
+        if (c + 1 < layers && ljgap__bytes_seek(&b, b.pos + bytes + 8))
             return bad(err, (long)len, "the file ends after layer %u", c);
     }
-    ljgap_bytes_seek(&b, data);
+    ljgap__bytes_seek(&b, data);
     map->z = malloc((size_t)xres * yres * sizeof *map->z);
     if (!map->z) return LJGAP_FILES_NOMEM;
     map->nx = xres, map->ny = yres;
     for (size_t i = 0; i < (size_t)xres * yres; i++) {
-        float v = ljgap_bytes_f32(&b, 0);
+        float v = ljgap__bytes_f32(&b, 0);
         if (v == NO_DATA || !isfinite(v))
             map->z[i] = NAN, map->missing++;
         else
@@ -174,8 +174,8 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
 
 /* The reader: read_file, with a fault's offset kept inside the file (a length or an offset
  * read from a header may point past its end: the fault is then where the file ends). */
-static int plu_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int plu_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
     err->offset = -1;
     int rc = read_file(buf, len, channel, map, err);
@@ -183,7 +183,7 @@ static int plu_read(const unsigned char *buf, size_t len, const char *channel, l
     return rc;
 }
 
-const ljgap_files_format ljgap_files_plu = {
+const ljgap__files_format ljgap__files_plu = {
     .name = NAME,
     .extensions = ".plu",
     .media_type = "application/x-sensofar-spm",

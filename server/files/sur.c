@@ -65,81 +65,81 @@ static int sur_probe(const unsigned char *buf, size_t len)
     return len >= 12 && (!memcmp(buf, "DIGITAL SURF", 12) || !memcmp(buf, "DSCOMPRESSED", 12));
 }
 
-static void field_text(ljgap_bytes *b, size_t at, size_t n, char *out, size_t size)
+static void field_text(ljgap__bytes *b, size_t at, size_t n, char *out, size_t size)
 {
-    const unsigned char *p = ljgap_bytes_at(b, at, n);
+    const unsigned char *p = ljgap__bytes_at(b, at, n);
     if (p)
-        ljgap_fb_text(p, n, out, size);
+        ljgap__fb_text(p, n, out, size);
     else
         out[0] = 0;
 }
 
 /* Reads the header of the object at `at` and places its zones: 0, or LJGAP_FILES_BAD. */
-static int sur_header(ljgap_bytes *b, size_t at, sur_obj *o, ljgap_files_err *err)
+static int sur_header(ljgap__bytes *b, size_t at, sur_obj *o, ljgap__files_err *err)
 {
     memset(o, 0, sizeof *o);
     o->at = at;
-    const unsigned char *sig = ljgap_bytes_at(b, at, 12);
+    const unsigned char *sig = ljgap__bytes_at(b, at, 12);
     if (!sig || (memcmp(sig, "DIGITAL SURF", 12) && memcmp(sig, "DSCOMPRESSED", 12)))
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at, NULL,
                              "no Digital Surf object header at byte %zu", at);
     o->compressed = !memcmp(sig, "DSCOMPRESSED", 12);
-    if (!ljgap_bytes_has(b, at, HDR))
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
+    if (!ljgap__bytes_has(b, at, HDR))
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
                              "the 512-byte header at byte %zu is cut short at byte %zu", at,
                              b->len);
-    ljgap_bytes_seek(b, at + 12);
-    unsigned format = ljgap_bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 12);
+    unsigned format = ljgap__bytes_u16(b, 0);
     if (format != 0)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 12, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 12, NULL,
                              "format %u: only the PC byte order (0) is read", format);
-    ljgap_bytes_seek(b, at + 18);
-    o->type = ljgap_bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 18);
+    o->type = ljgap__bytes_u16(b, 0);
     field_text(b, at + 20, 30, o->name, sizeof o->name);
-    ljgap_bytes_seek(b, at + 82);
-    o->acquisition = ljgap_bytes_u16(b, 0);
-    ljgap_bytes_seek(b, at + 86);
-    o->nonmeasured = ljgap_bytes_u16(b, 0) == 1;
-    ljgap_bytes_seek(b, at + 98);
-    o->bits = ljgap_bytes_u16(b, 0);
-    o->zmin = ljgap_bytes_i32(b, 0);
-    (void)ljgap_bytes_i32(b, 0); /* zmax */
-    int32_t nx = ljgap_bytes_i32(b, 0), ny = ljgap_bytes_i32(b, 0);
-    uint32_t total = ljgap_bytes_u32(b, 0);
-    o->dx = ljgap_bytes_f32(b, 0), o->dy = ljgap_bytes_f32(b, 0), o->dz = ljgap_bytes_f32(b, 0);
+    ljgap__bytes_seek(b, at + 82);
+    o->acquisition = ljgap__bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 86);
+    o->nonmeasured = ljgap__bytes_u16(b, 0) == 1;
+    ljgap__bytes_seek(b, at + 98);
+    o->bits = ljgap__bytes_u16(b, 0);
+    o->zmin = ljgap__bytes_i32(b, 0);
+    (void)ljgap__bytes_i32(b, 0); /* zmax */
+    int32_t nx = ljgap__bytes_i32(b, 0), ny = ljgap__bytes_i32(b, 0);
+    uint32_t total = ljgap__bytes_u32(b, 0);
+    o->dx = ljgap__bytes_f32(b, 0), o->dy = ljgap__bytes_f32(b, 0), o->dz = ljgap__bytes_f32(b, 0);
     field_text(b, at + 180, 16, o->ux, sizeof o->ux);
     field_text(b, at + 196, 16, o->uy, sizeof o->uy);
     field_text(b, at + 212, 16, o->uz, sizeof o->uz);
-    ljgap_bytes_seek(b, at + 290);
-    o->inversion = ljgap_bytes_u16(b, 0);
-    ljgap_bytes_seek(b, at + 306);
+    ljgap__bytes_seek(b, at + 290);
+    o->inversion = ljgap__bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 306);
     for (int i = 0; i < 6; i++)
-        o->date[i] = ljgap_bytes_u16(b, 0);
-    ljgap_bytes_seek(b, at + 324);
-    o->csize = ljgap_bytes_u32(b, 0);
-    ljgap_bytes_seek(b, at + 334);
-    unsigned comment = ljgap_bytes_u16(b, 0), priv = ljgap_bytes_u16(b, 0);
-    ljgap_bytes_seek(b, at + 474);
-    o->zoff = ljgap_bytes_f32(b, 0);
+        o->date[i] = ljgap__bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 324);
+    o->csize = ljgap__bytes_u32(b, 0);
+    ljgap__bytes_seek(b, at + 334);
+    unsigned comment = ljgap__bytes_u16(b, 0), priv = ljgap__bytes_u16(b, 0);
+    ljgap__bytes_seek(b, at + 474);
+    o->zoff = ljgap__bytes_f32(b, 0);
     if (b->bad) /* not reached: the header's 512 bytes are there */
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->where, NULL, "header cut short");
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->where, NULL, "header cut short");
     if (o->bits != 16 && o->bits != 32)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 98, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 98, NULL,
                              "%d bits a point: only 16 and 32 are defined", o->bits);
     if (nx <= 0 || ny <= 0)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 108, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 108, NULL,
                              "a grid of %d x %d points", (int)nx, (int)ny);
     o->nx = (uint32_t)nx, o->ny = (uint32_t)ny;
     if ((uint64_t)o->nx * o->ny != total)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 116, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 116, NULL,
                              "%u points stated, %u x %u in the grid", total, o->nx, o->ny);
     if (!isfinite(o->dz) || !isfinite(o->zoff))
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 128, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 128, NULL,
                              "the z step or offset is not a finite number");
     o->data = at + HDR + comment + priv;
     uint64_t size = o->compressed ? o->csize : (uint64_t)total * (unsigned)(o->bits / 8);
-    if (!ljgap_bytes_has(b, o->data, 0) || size > b->len - o->data)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
+    if (!ljgap__bytes_has(b, o->data, 0) || size > b->len - o->data)
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
                              "the points (%llu bytes from byte %zu) are cut short at byte %zu",
                              (unsigned long long)size, o->data, b->len);
     o->end = o->data + (size_t)size;
@@ -147,52 +147,52 @@ static int sur_header(ljgap_bytes *b, size_t at, sur_obj *o, ljgap_files_err *er
 }
 
 /* Inflates the compressed points of o into out (raw bytes of nx * ny points). */
-static int sur_inflate(ljgap_bytes *b, const sur_obj *o, unsigned char *out, size_t rawsize,
-                       ljgap_files_err *err)
+static int sur_inflate(ljgap__bytes *b, const sur_obj *o, unsigned char *out, size_t rawsize,
+                       ljgap__files_err *err)
 {
-    ljgap_bytes_seek(b, o->data);
-    uint32_t ndir = ljgap_bytes_u32(b, 0);
+    ljgap__bytes_seek(b, o->data);
+    uint32_t ndir = ljgap__bytes_u32(b, 0);
     if (b->bad || ndir == 0 || ndir > (o->end - o->data) / 8)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
                              "a compressed data block with %u directory entries", ndir);
     size_t stream = o->data + 4 + (size_t)ndir * 8, done = 0;
     for (uint32_t d = 0; d < ndir; d++) {
-        ljgap_bytes_seek(b, o->data + 4 + (size_t)d * 8);
-        uint32_t raw = ljgap_bytes_u32(b, 0), zipped = ljgap_bytes_u32(b, 0);
+        ljgap__bytes_seek(b, o->data + 4 + (size_t)d * 8);
+        uint32_t raw = ljgap__bytes_u32(b, 0), zipped = ljgap__bytes_u32(b, 0);
         if (b->bad || zipped > o->end - stream || raw > rawsize - done)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)(o->data + 4 + d * 8), NULL,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)(o->data + 4 + d * 8), NULL,
                                  "compressed stream %u (%u bytes, %u raw) does not fit", d, zipped,
                                  raw);
         z_stream zs;
         memset(&zs, 0, sizeof zs);
         if (inflateInit(&zs) != Z_OK)
-            return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
+            return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
         zs.next_in = (unsigned char *)(uintptr_t)(b->buf + stream), zs.avail_in = zipped;
         zs.next_out = out + done, zs.avail_out = raw;
         int rc = inflate(&zs, Z_FINISH);
         size_t got = raw - zs.avail_out;
         inflateEnd(&zs);
         if (rc != Z_STREAM_END || got != raw)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)stream, NULL,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)stream, NULL,
                                  "compressed stream %u does not inflate to its %u bytes", d, raw);
         done += raw, stream += zipped;
     }
     if (done != rawsize)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
                              "the compressed streams hold %zu bytes, the grid %zu", done, rawsize);
     return 0;
 }
 
-static int sur_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int sur_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
-    ljgap_fb_map_init(map, SUR);
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
-    if (!ljgap_bytes_has(&b, 0, 16))
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short in the header");
-    ljgap_bytes_seek(&b, 14);
-    unsigned nobj = ljgap_bytes_u16(&b, 0);
+    ljgap__fb_map_init(map, SUR);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
+    if (!ljgap__bytes_has(&b, 0, 16))
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short in the header");
+    ljgap__bytes_seek(&b, 14);
+    unsigned nobj = ljgap__bytes_u16(&b, 0);
     if (nobj == 0) nobj = 1;
     if (nobj > LJGAP_FILES_MAX_CHANNELS) nobj = LJGAP_FILES_MAX_CHANNELS;
     /* Every object's header, for the channel list; the chosen one is read. */
@@ -208,14 +208,14 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
         map->n_channels = (int)k + 1;
         at = objs[k].end;
     }
-    int c = ljgap_fb_channel(map, channel, 0);
+    int c = ljgap__fb_channel(map, channel, 0);
     if (c < 0)
-        return ljgap_fb_fail(err, LJGAP_FILES_CHANNEL, SUR, -1, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, SUR, -1, NULL,
                              "no channel \"%s\": the file has %d", channel, map->n_channels);
     const sur_obj *o = &objs[c];
     map->channel_index = c;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[c]);
-    int rc = ljgap_fb_alloc(map, o->nx, o->ny, err, SUR, (long)o->at + 108);
+    int rc = ljgap__fb_alloc(map, o->nx, o->ny, err, SUR, (long)o->at + 108);
     if (rc) return rc;
 
     size_t n = (size_t)o->nx * o->ny, w = (size_t)o->bits / 8;
@@ -223,7 +223,7 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
     unsigned char *raw = NULL;
     if (o->compressed) {
         raw = malloc(n * w);
-        if (!raw) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
+        if (!raw) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
         rc = sur_inflate(&b, o, raw, n * w, err);
         if (rc) {
             free(raw);
@@ -231,11 +231,11 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
         }
         p = raw;
     } else {
-        p = ljgap_bytes_at(&b, o->data, n * w); /* checked by sur_header */
-        if (!p) return ljgap_fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short");
+        p = ljgap__bytes_at(&b, o->data, n * w); /* checked by sur_header */
+        if (!p) return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short");
     }
-    double fz = ljgap_fb_length_unit(o->uz), fx = ljgap_fb_length_unit(o->ux),
-           fy = ljgap_fb_length_unit(o->uy);
+    double fz = ljgap__fb_length_unit(o->uz), fx = ljgap__fb_length_unit(o->ux),
+           fy = ljgap__fb_length_unit(o->uy);
     if (fz == 0) fz = 1; /* not a length: the values in the stated unit */
     double sign = o->inversion >= 1 && o->inversion <= 3 ? -1 : 1;
     int64_t hole = (int64_t)o->zmin - 2;
@@ -244,9 +244,9 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
                            : (int32_t)((uint32_t)p[4 * k] | (uint32_t)p[4 * k + 1] << 8 |
                                        (uint32_t)p[4 * k + 2] << 16 | (uint32_t)p[4 * k + 3] << 24);
         if (o->nonmeasured && v == hole)
-            ljgap_fb_put(map, k, NAN);
+            ljgap__fb_put(map, k, NAN);
         else
-            ljgap_fb_put(map, k, sign * ((double)v * o->dz + o->zoff) * fz);
+            ljgap__fb_put(map, k, sign * ((double)v * o->dz + o->zoff) * fz);
     }
     free(raw);
     /* inversion 2 and 3 also mirror the map (as Gwyddion reads them): x, then y */
@@ -277,7 +277,7 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
     return 0;
 }
 
-const ljgap_files_format ljgap_files_sur = {
+const ljgap__files_format ljgap__files_sur = {
     .name = "sur",
     .extensions = ".sur",
     .media_type = NULL,

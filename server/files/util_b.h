@@ -17,10 +17,10 @@
 
 /* Fills err (when given) and returns code: msg printf-style, offset -1 when none applies,
  * member NULL when the file is not a container. */
-static inline int ljgap_fb_fail(ljgap_files_err *err, int code, const char *format, long offset,
+static inline int ljgap__fb_fail(ljgap__files_err *err, int code, const char *format, long offset,
                                 const char *member, const char *fmt, ...)
     __attribute__((format(printf, 6, 7)));
-static inline int ljgap_fb_fail(ljgap_files_err *err, int code, const char *format, long offset,
+static inline int ljgap__fb_fail(ljgap__files_err *err, int code, const char *format, long offset,
                                 const char *member, const char *fmt, ...)
 {
     if (!err) return code;
@@ -35,7 +35,7 @@ static inline int ljgap_fb_fail(ljgap_files_err *err, int code, const char *form
 }
 
 /* Clears the map and names its reader (every field a reader does not set stays 0 or ""). */
-static inline void ljgap_fb_map_init(ljgap_files_map *map, const char *format)
+static inline void ljgap__fb_map_init(ljgap__files_map *map, const char *format)
 {
     memset(map, 0, sizeof *map);
     map->format = format;
@@ -43,24 +43,24 @@ static inline void ljgap_fb_map_init(ljgap_files_map *map, const char *format)
 
 /* Allocates map->z for nx * ny points: LJGAP_FILES_BAD for an empty grid, TOOBIG past the
  * limit, NOMEM. */
-static inline int ljgap_fb_alloc(ljgap_files_map *map, size_t nx, size_t ny, ljgap_files_err *err,
+static inline int ljgap__fb_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err,
                                  const char *format, long offset)
 {
     if (nx == 0 || ny == 0)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, offset, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, offset, NULL,
                              "the grid is empty (%zu x %zu points)", nx, ny);
     if (nx > LJGAP_FILES_MAX_POINTS || ny > LJGAP_FILES_MAX_POINTS / nx)
-        return ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, format, offset, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, format, offset, NULL,
                              "%zu x %zu points exceed the limit of %u", nx, ny,
                              (unsigned)LJGAP_FILES_MAX_POINTS);
     map->z = malloc(nx * ny * sizeof *map->z);
-    if (!map->z) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, NULL, "out of memory");
+    if (!map->z) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, format, -1, NULL, "out of memory");
     map->nx = nx, map->ny = ny;
     return 0;
 }
 
 /* Stores a height: a non-finite value is a missing point (NaN, counted). */
-static inline void ljgap_fb_put(ljgap_files_map *map, size_t k, double v)
+static inline void ljgap__fb_put(ljgap__files_map *map, size_t k, double v)
 {
     if (isfinite(v))
         map->z[k] = v;
@@ -70,7 +70,7 @@ static inline void ljgap_fb_put(ljgap_files_map *map, size_t k, double v)
 
 /* The channel asked for, among map->channels[0 .. n_channels): NULL or "" the default dflt,
  * else a decimal index or a title (case-insensitive). -1 when there is no such channel. */
-static inline int ljgap_fb_channel(const ljgap_files_map *map, const char *channel, int dflt)
+static inline int ljgap__fb_channel(const ljgap__files_map *map, const char *channel, int dflt)
 {
     if (!channel || !*channel) return dflt;
     char *end;
@@ -83,7 +83,7 @@ static inline int ljgap_fb_channel(const ljgap_files_map *map, const char *chann
 
 /* Metres per unit for a length unit's name (surrounding blanks ignored): m, mm, um (also µm in
  * UTF-8 or Latin-1, and "micron"), nm, pm, A (Å), km. Returns 0 for an unknown name. */
-static inline double ljgap_fb_length_unit(const char *unit)
+static inline double ljgap__fb_length_unit(const char *unit)
 {
     char u[32];
     size_t n = 0;
@@ -109,7 +109,7 @@ static inline double ljgap_fb_length_unit(const char *unit)
 
 /* Copies n bytes of a fixed-size text field (Latin-1, NUL- or blank-padded) into out as UTF-8,
  * blanks trimmed, control characters dropped. */
-static inline void ljgap_fb_text(const unsigned char *p, size_t n, char *out, size_t size)
+static inline void ljgap__fb_text(const unsigned char *p, size_t n, char *out, size_t size)
 {
     size_t k = 0;
     for (size_t i = 0; i < n && p[i]; i++) {

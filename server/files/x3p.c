@@ -122,18 +122,18 @@ static int xml_num(span doc, const char *path, double *v)
     return 1;
 }
 
-static int x3p_fail(ljgap_files_err *err, const char *fmt, const char *what)
+static int x3p_fail(ljgap__files_err *err, const char *fmt, const char *what)
 {
-    return ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, "main.xml", fmt, what);
+    return ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, "main.xml", fmt, what);
 }
 
-static int x3p_read(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int x3p_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
-    ljgap_fb_map_init(map, X3P);
+    ljgap__fb_map_init(map, X3P);
     unsigned char *xml = NULL, *data = NULL, *valid = NULL;
     size_t xlen = 0, dlen = 0, vlen = 0;
-    int rc = ljgap_zip_extract(buf, len, "main.xml", XML_MAX, &xml, &xlen, X3P, err);
+    int rc = ljgap__zip_extract(buf, len, "main.xml", XML_MAX, &xml, &xlen, X3P, err);
     if (rc) return rc;
     span doc = {(const char *)xml, xlen};
     char t[LJGAP_FILES_TEXT], t2[LJGAP_FILES_TEXT];
@@ -205,15 +205,15 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
     for (size_t l = 0; l < nl; l++)
         snprintf(map->channels[l], LJGAP_FILES_TEXT, nl == 1 ? "Z" : "Z layer %zu", l);
     map->n_channels = (int)nl;
-    int c = ljgap_fb_channel(map, channel, 0);
+    int c = ljgap__fb_channel(map, channel, 0);
     if (c < 0) {
-        rc = ljgap_fb_fail(err, LJGAP_FILES_CHANNEL, X3P, -1, NULL,
+        rc = ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, X3P, -1, NULL,
                            "no channel \"%s\": the file has %d", channel, map->n_channels);
         goto done;
     }
     map->channel_index = c;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[c]);
-    rc = ljgap_fb_alloc(map, nx, ny, err, X3P, -1);
+    rc = ljgap__fb_alloc(map, nx, ny, err, X3P, -1);
     if (rc) goto done;
     size_t n = nx * ny, first = (size_t)c * n;
 
@@ -221,39 +221,39 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
     if (xml_text(doc, "Record3/DataLink/PointDataLink", link, sizeof link) && link[0]) {
         /* the whole member is inflated: all its layers within the limit of one map */
         if (n * w > (size_t)LJGAP_FILES_MAX_POINTS * 8 / nl) {
-            rc = ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, X3P, -1, link,
+            rc = ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, X3P, -1, link,
                                "%zu layers of %zu x %zu points exceed the limit", nl, nx, ny);
             goto done;
         }
-        rc = ljgap_zip_extract(buf, len, link, n * nl * w + 64, &data, &dlen, X3P, err);
+        rc = ljgap__zip_extract(buf, len, link, n * nl * w + 64, &data, &dlen, X3P, err);
         if (rc) goto done;
         if (dlen / w < n * nl) {
-            rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,
+            rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,
                                "%zu bytes of points, %zu x %zu x %zu values of %zu bytes "
                                "stated",
                                dlen, nx, ny, nl, w);
             goto done;
         }
         if (xml_text(doc, "Record3/DataLink/ValidPointsLink", t2, sizeof t2) && t2[0]) {
-            rc = ljgap_zip_extract(buf, len, t2, n * nl / 8 + 1, &valid, &vlen, X3P, err);
+            rc = ljgap__zip_extract(buf, len, t2, n * nl / 8 + 1, &valid, &vlen, X3P, err);
             if (rc) goto done;
             if (vlen < (n * nl + 7) / 8) {
-                rc = ljgap_fb_fail(err, LJGAP_FILES_BAD, X3P, -1, t2,
+                rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, t2,
                                    "%zu bytes of valid-point bits for %zu points", vlen, n * nl);
                 goto done;
             }
         }
-        ljgap_bytes b;
-        ljgap_bytes_init(&b, data, dlen);
-        ljgap_bytes_seek(&b, first * w);
+        ljgap__bytes b;
+        ljgap__bytes_init(&b, data, dlen);
+        ljgap__bytes_seek(&b, first * w);
         for (size_t k = 0; k < n; k++) {
-            double v = dtype == 'I'   ? zoff + zinc * ljgap_bytes_i16(&b, 0)
-                       : dtype == 'L' ? zoff + zinc * ljgap_bytes_i32(&b, 0)
-                       : dtype == 'F' ? ljgap_bytes_f32(&b, 0)
-                                      : ljgap_bytes_f64(&b, 0);
+            double v = dtype == 'I'   ? zoff + zinc * ljgap__bytes_i16(&b, 0)
+                       : dtype == 'L' ? zoff + zinc * ljgap__bytes_i32(&b, 0)
+                       : dtype == 'F' ? ljgap__bytes_f32(&b, 0)
+                                      : ljgap__bytes_f64(&b, 0);
             size_t q = first + k;
             if (valid && !(valid[q / 8] >> (q % 8) & 1)) v = NAN;
-            ljgap_fb_put(map, k, v);
+            ljgap__fb_put(map, k, v);
         }
     } else {
         span list, item;
@@ -281,7 +281,7 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
                     goto done;
                 }
                 if (dtype == 'I' || dtype == 'L') d = zoff + zinc * d;
-                ljgap_fb_put(map, k - first, d);
+                ljgap__fb_put(map, k - first, d);
             }
             k++;
             size_t used = (size_t)(item.s + item.n - list.s);
@@ -305,7 +305,7 @@ done:
     return rc;
 }
 
-const ljgap_files_format ljgap_files_x3p = {
+const ljgap__files_format ljgap__files_x3p = {
     .name = "x3p",
     .extensions = ".x3p",
     .media_type = NULL,

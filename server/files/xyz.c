@@ -137,8 +137,8 @@ static const char *grid(const double *v, size_t n, size_t stride, double *x0, do
     return NULL;
 }
 
-static int read_xyz(const unsigned char *buf, size_t len, const char *channel, ljgap_files_map *map,
-                    ljgap_files_err *err)
+static int read_xyz(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
+                    ljgap__files_err *err)
 {
     double *v = NULL;
     size_t n = 0, cap = 0, p = 0, line = 0;
@@ -154,13 +154,13 @@ static int read_xyz(const unsigned char *buf, size_t len, const char *channel, l
         if ((k = numbers(s, m, x, &nan)) == 0) continue;
         if (k < 0 && !n) continue; /* a header line before the numbers */
         if (k < 0 || k < 2 || k > 3 || (cols && k != cols) || (nan && nan != k)) {
-            st = ljgap_files_fail(err, NAME, (long)at, NULL, "line %zu is not %s numbers (x%s z)",
+            st = ljgap__files_fail(err, NAME, (long)at, NULL, "line %zu is not %s numbers (x%s z)",
                                   line, cols == 2 ? "2" : "3", cols == 2 ? "" : " y");
             goto end;
         }
         cols = k;
         if (n / 3 >= LJGAP_FILES_MAX_POINTS) {
-            ljgap_files_fail(err, NAME, (long)at, NULL, "more than %u points",
+            ljgap__files_fail(err, NAME, (long)at, NULL, "more than %u points",
                              LJGAP_FILES_MAX_POINTS);
             st = LJGAP_FILES_TOOBIG;
             goto end;
@@ -182,11 +182,11 @@ static int read_xyz(const unsigned char *buf, size_t len, const char *channel, l
     size_t N = n / 3, nx, ny;
     double x0, y0, dx, dy;
     if (N < 2) {
-        st = ljgap_files_fail(err, NAME, (long)len, NULL, "fewer than 2 points");
+        st = ljgap__files_fail(err, NAME, (long)len, NULL, "fewer than 2 points");
         goto end;
     }
-    ljgap_files_add_channel(map, "Height");
-    if (ljgap_files_channel_pick(map, channel, err) < 0) {
+    ljgap__files_add_channel(map, "Height");
+    if (ljgap__files_channel_pick(map, channel, err) < 0) {
         st = LJGAP_FILES_CHANNEL;
         goto end;
     }
@@ -194,17 +194,17 @@ static int read_xyz(const unsigned char *buf, size_t len, const char *channel, l
     const char *axis = "x";
     if ((why = grid(v, N, 3, &x0, &dx, &nx)) ||
         (axis = "y", why = grid(v + 1, N, 3, &y0, &dy, &ny))) {
-        st = ljgap_files_fail(err, NAME, -1, NULL, "the points form no grid: %s %s", axis, why);
+        st = ljgap__files_fail(err, NAME, -1, NULL, "the points form no grid: %s %s", axis, why);
         goto end;
     }
     if (nx < 2 || (cols == 3 && ny < 2) || (double)nx * (double)ny > N / FILL_MIN) {
-        st = ljgap_files_fail(err, NAME, -1, NULL,
+        st = ljgap__files_fail(err, NAME, -1, NULL,
                               "the %zu points form no regular grid (%zu x %zu points would "
                               "hold them)",
                               N, nx, ny);
         goto end;
     }
-    if ((st = ljgap_files_alloc(map, nx, ny, err))) goto end;
+    if ((st = ljgap__files_alloc(map, nx, ny, err))) goto end;
     for (size_t i = 0; i < nx * ny; i++)
         map->z[i] = INFINITY; /* not given yet */
     for (size_t i = 0; i < N; i++) {
@@ -212,7 +212,7 @@ static int read_xyz(const unsigned char *buf, size_t len, const char *channel, l
                b = ny > 1 ? (size_t)llround((v[3 * i + 1] - y0) / dy) : 0;
         double *z = &map->z[b * nx + a];
         if (*z != INFINITY) {
-            st = ljgap_files_fail(err, NAME, -1, NULL, "the point x = %g, y = %g is given twice",
+            st = ljgap__files_fail(err, NAME, -1, NULL, "the point x = %g, y = %g is given twice",
                                   v[3 * i], v[3 * i + 1]);
             goto end;
         }
@@ -228,4 +228,4 @@ end:
     return st;
 }
 
-const ljgap_files_format ljgap_files_xyz = {NAME, ".xyz .txt .csv", NULL, probe, read_xyz};
+const ljgap__files_format ljgap__files_xyz = {NAME, ".xyz .txt .csv", NULL, probe, read_xyz};

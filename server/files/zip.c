@@ -15,12 +15,12 @@
 #include "util_b.h"
 #include "zip.h"
 
-int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, size_t maxlen,
-                      unsigned char **out, size_t *outlen, const char *format, ljgap_files_err *err)
+int ljgap__zip_extract(const unsigned char *buf, size_t len, const char *name, size_t maxlen,
+                      unsigned char **out, size_t *outlen, const char *format, ljgap__files_err *err)
 {
     *out = NULL, *outlen = 0;
-    ljgap_bytes b;
-    ljgap_bytes_init(&b, buf, len);
+    ljgap__bytes b;
+    ljgap__bytes_init(&b, buf, len);
     /* the end record: the last signature from which its fixed 22 bytes fit */
     size_t eocd = (size_t)-1;
     if (len >= 22)
@@ -30,71 +30,71 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
                 break;
             }
     if (eocd == (size_t)-1)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)len, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)len, NULL,
                              "no zip central directory: the archive is cut short or damaged");
-    ljgap_bytes_seek(&b, eocd + 10);
-    unsigned entries = ljgap_bytes_u16(&b, 0);
-    uint32_t cdsize = ljgap_bytes_u32(&b, 0), cdoff = ljgap_bytes_u32(&b, 0);
+    ljgap__bytes_seek(&b, eocd + 10);
+    unsigned entries = ljgap__bytes_u16(&b, 0);
+    uint32_t cdsize = ljgap__bytes_u32(&b, 0), cdoff = ljgap__bytes_u32(&b, 0);
     if (b.bad || cdoff > eocd || cdsize > eocd - cdoff)
-        return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)eocd, NULL,
+        return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)eocd, NULL,
                              "the zip central directory (%u bytes at %u) lies outside the "
                              "archive",
                              cdsize, cdoff);
     size_t nlen = strlen(name), at = cdoff;
     for (unsigned e = 0; e < entries; e++) {
         size_t entry = at; /* this entry's offset */
-        ljgap_bytes_seek(&b, at);
-        uint32_t sig = ljgap_bytes_u32(&b, 0);
+        ljgap__bytes_seek(&b, at);
+        uint32_t sig = ljgap__bytes_u32(&b, 0);
         if (b.bad || sig != 0x02014b50)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(at < len ? at : len), NULL,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)(at < len ? at : len), NULL,
                                  "zip central directory entry %u is damaged", e);
-        ljgap_bytes_seek(&b, at + 8);
-        unsigned flags = ljgap_bytes_u16(&b, 0), method = ljgap_bytes_u16(&b, 0);
-        ljgap_bytes_seek(&b, at + 16);
-        uint32_t crc = ljgap_bytes_u32(&b, 0), csize = ljgap_bytes_u32(&b, 0),
-                 usize = ljgap_bytes_u32(&b, 0);
-        unsigned namelen = ljgap_bytes_u16(&b, 0), extra = ljgap_bytes_u16(&b, 0),
-                 comment = ljgap_bytes_u16(&b, 0);
-        ljgap_bytes_seek(&b, at + 42);
-        uint32_t local = ljgap_bytes_u32(&b, 0);
-        const unsigned char *ename = ljgap_bytes_at(&b, at + 46, namelen);
+        ljgap__bytes_seek(&b, at + 8);
+        unsigned flags = ljgap__bytes_u16(&b, 0), method = ljgap__bytes_u16(&b, 0);
+        ljgap__bytes_seek(&b, at + 16);
+        uint32_t crc = ljgap__bytes_u32(&b, 0), csize = ljgap__bytes_u32(&b, 0),
+                 usize = ljgap__bytes_u32(&b, 0);
+        unsigned namelen = ljgap__bytes_u16(&b, 0), extra = ljgap__bytes_u16(&b, 0),
+                 comment = ljgap__bytes_u16(&b, 0);
+        ljgap__bytes_seek(&b, at + 42);
+        uint32_t local = ljgap__bytes_u32(&b, 0);
+        const unsigned char *ename = ljgap__bytes_at(&b, at + 46, namelen);
         if (!ename)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)b.where, NULL,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)b.where, NULL,
                                  "zip central directory entry %u is cut short", e);
         at += 46 + (size_t)namelen + extra + comment;
         if (namelen != nlen || memcmp(ename, name, nlen)) continue;
 
         /* the member */
         if (flags & 1)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                  "the member is encrypted");
         if (method != 0 && method != 8)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                  "compression method %u: only stored (0) and deflate (8) are "
                                  "read",
                                  method);
         if (usize > maxlen)
-            return ljgap_fb_fail(err, LJGAP_FILES_TOOBIG, format, (long)entry, name,
+            return ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, format, (long)entry, name,
                                  "the member has %u bytes, more than the %zu allowed", usize,
                                  maxlen);
-        ljgap_bytes_seek(&b, local);
-        sig = ljgap_bytes_u32(&b, 0);
-        ljgap_bytes_seek(&b, (size_t)local + 26);
-        unsigned lname = ljgap_bytes_u16(&b, 0), lextra = ljgap_bytes_u16(&b, 0);
+        ljgap__bytes_seek(&b, local);
+        sig = ljgap__bytes_u32(&b, 0);
+        ljgap__bytes_seek(&b, (size_t)local + 26);
+        unsigned lname = ljgap__bytes_u16(&b, 0), lextra = ljgap__bytes_u16(&b, 0);
         if (b.bad || sig != 0x04034b50)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(local < len ? local : len),
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)(local < len ? local : len),
                                  name, "the member's local header is missing or damaged");
         size_t data = (size_t)local + 30 + lname + lextra;
-        const unsigned char *src = ljgap_bytes_at(&b, data, csize);
+        const unsigned char *src = ljgap__bytes_at(&b, data, csize);
         if (!src)
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)len, name,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)len, name,
                                  "the member (%u bytes from byte %zu) is cut short", csize, data);
         unsigned char *dst = malloc((size_t)usize + 1);
-        if (!dst) return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, name, "out of memory");
+        if (!dst) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, format, -1, name, "out of memory");
         if (method == 0) {
             if (csize != usize) {
                 free(dst);
-                return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
+                return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)entry, name,
                                      "a stored member of %u bytes claims %u", csize, usize);
             }
             memcpy(dst, src, usize);
@@ -103,7 +103,7 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
             memset(&zs, 0, sizeof zs);
             if (inflateInit2(&zs, -15) != Z_OK) {
                 free(dst);
-                return ljgap_fb_fail(err, LJGAP_FILES_NOMEM, format, -1, name, "out of memory");
+                return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, format, -1, name, "out of memory");
             }
             zs.next_in = (unsigned char *)(uintptr_t)src, zs.avail_in = csize;
             zs.next_out = dst, zs.avail_out = usize;
@@ -112,19 +112,19 @@ int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, si
             inflateEnd(&zs);
             if (rc != Z_STREAM_END || got != usize) {
                 free(dst);
-                return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)(data + used), name,
+                return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)(data + used), name,
                                      "the deflated member does not inflate to its %u bytes", usize);
             }
         }
         if (crc32(0L, dst, usize) != crc) {
             free(dst);
-            return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, (long)data, name,
+            return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, (long)data, name,
                                  "the member's CRC-32 does not match: it is damaged");
         }
         dst[usize] = 0;
         *out = dst, *outlen = usize;
         return 0;
     }
-    return ljgap_fb_fail(err, LJGAP_FILES_BAD, format, -1, name, "the archive has no member %s",
+    return ljgap__fb_fail(err, LJGAP_FILES_BAD, format, -1, name, "the archive has no member %s",
                          name);
 }

@@ -13,8 +13,8 @@
  * NUL byte after the *outlen bytes; free() it). Refuses members over maxlen bytes. Returns 0,
  * or LJGAP_FILES_BAD (err: format, the byte offset, the member), LJGAP_FILES_TOOBIG,
  * LJGAP_FILES_NOMEM. A missing member is LJGAP_FILES_BAD too. */
-int ljgap_zip_extract(const unsigned char *buf, size_t len, const char *name, size_t maxlen,
+int ljgap__zip_extract(const unsigned char *buf, size_t len, const char *name, size_t maxlen,
                       unsigned char **out, size_t *outlen, const char *format,
-                      ljgap_files_err *err);
+                      ljgap__files_err *err);
 
 #endif

@@ -36,7 +36,7 @@
 #define FINISH_RETRY_S 0.5 /* a failed write of a job's end is tried again this often */
 
 typedef struct slot {
-    struct ljgap_jobs *js;         /* the runner (for the progress callback) */
+    struct ljgap__jobs *js;         /* the runner (for the progress callback) */
     int busy;                      /* a job runs in this slot */
     char id[LJGAP_JOB_ID_LEN + 1]; /* its id */
     long run;                      /* its claim (the lease token) */
@@ -45,22 +45,22 @@ typedef struct slot {
     int lost;                      /* the store gave the job to someone else */
     double progress;               /* latest fraction reported, 0..1 */
     double written;                /* progress last written to the store */
-    double renewed;                /* ljgap_clock_now() at the last renewal (0: due) */
+    double renewed;                /* ljgap__clock_now() at the last renewal (0: due) */
 } slot;
 
-struct ljgap_jobs {
-    ljgap_jobs_config cfg;   /* as given, checked */
-    ljgap_jobstore *store;   /* the caller's */
-    ljgap_job_kind *kinds;   /* copied at alloc */
+struct ljgap__jobs {
+    ljgap__jobs_config cfg;   /* as given, checked */
+    ljgap__jobstore *store;   /* the caller's */
+    ljgap__job_kind *kinds;   /* copied at alloc */
     size_t nkinds;           /* entries in kinds */
     char owner[96];          /* host:pid, the name claims are made under */
     pthread_mutex_t lock;    /* guards everything below */
     pthread_cond_t work;     /* a job was submitted here, or stopping */
     pthread_cond_t finished; /* a job running here returned, or the keeper must quit */
     unsigned long submitted; /* jobs submitted here so far (a worker's claim saw up to...) */
-    int stopping;            /* ljgap_jobs_shutdown was called */
+    int stopping;            /* ljgap__jobs_shutdown was called */
     int keeper_quit;         /* the keeper must return */
-    double logged;           /* ljgap_clock_now() of the last store error logged */
+    double logged;           /* ljgap__clock_now() of the last store error logged */
     slot *slots;             /* one per worker */
     pthread_t *threads;      /* the workers */
     unsigned n_threads;      /* workers started */
@@ -68,7 +68,7 @@ struct ljgap_jobs {
     int keeper_started;      /* it was started */
 };
 
-void ljgap_jobs_config_default(ljgap_jobs_config *c)
+void ljgap__jobs_config_default(ljgap__jobs_config *c)
 {
     c->workers = 1;
     c->queue_cap = 8;
@@ -81,9 +81,9 @@ void ljgap_jobs_config_default(ljgap_jobs_config *c)
 }
 
 /* Logs a store failure (what + the store's reason), at most once per LOG_SECONDS. */
-static void log_store(ljgap_jobs *js, const char *what, const char *id)
+static void log_store(ljgap__jobs *js, const char *what, const char *id)
 {
-    double now = ljgap_clock_now();
+    double now = ljgap__clock_now();
     int say;
     pthread_mutex_lock(&js->lock);
     say = js->logged == 0 || now - js->logged >= LOG_SECONDS;
@@ -91,7 +91,7 @@ static void log_store(ljgap_jobs *js, const char *what, const char *id)
     pthread_mutex_unlock(&js->lock);
     if (say)
         fprintf(stderr, "ljgapd: job store: %s%s%s: %s\n", what, id ? " " : "", id ? id : "",
-                ljgap_jobstore_errmsg());
+                ljgap__jobstore_errmsg());
 }
 
 static int map_store(int st)
@@ -110,7 +110,7 @@ static int map_store(int st)
     }
 }
 
-static const ljgap_job_kind *find_kind(const ljgap_jobs *js, const char *name)
+static const ljgap__job_kind *find_kind(const ljgap__jobs *js, const char *name)
 {
     for (size_t i = 0; i < js->nkinds; i++)
         if (strcmp(js->kinds[i].name, name) == 0) return &js->kinds[i];
@@ -132,20 +132,20 @@ static void on_progress(void *ctx, double fraction)
  * claim's lease could still hold (the keeper renews it meanwhile, once the store is back); after
  * that another daemon may run the job again, and the run guard drops this answer anyway. A
  * shutdown stops the retries: the job then runs again once its lease lapses. */
-static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state state,
+static void finish(ljgap__jobs *js, const ljgap__job_record *rec, ljgap__job_state state,
                    const char *answer)
 {
-    double until = ljgap_clock_now() + js->cfg.lease_seconds;
+    double until = ljgap__clock_now() + js->cfg.lease_seconds;
     int st, failed = 0, stopping = 0;
     for (;;) {
-        st = ljgap_jobstore_finish(js->store, rec->id, rec->run, state, answer,
+        st = ljgap__jobstore_finish(js->store, rec->id, rec->run, state, answer,
                                    answer ? strlen(answer) : 0);
-        if (st != LJGAP_JOBSTORE_ERROR || stopping || ljgap_clock_now() >= until) break;
+        if (st != LJGAP_JOBSTORE_ERROR || stopping || ljgap__clock_now() >= until) break;
         if (!failed) log_store(js, "cannot write the end of job (trying again)", rec->id);
         failed = 1;
         pthread_mutex_lock(&js->lock);
         if (!js->stopping) {
-            struct timespec t = ljgap_deadline_in(FINISH_RETRY_S);
+            struct timespec t = ljgap__deadline_in(FINISH_RETRY_S);
             pthread_cond_timedwait(&js->work, &js->lock, &t);
         }
         stopping = js->stopping;
@@ -163,26 +163,26 @@ static void finish(ljgap_jobs *js, const ljgap_job_record *rec, ljgap_job_state 
     else if (failed)
         fprintf(stderr, "ljgapd: job %s: its end was written once the job store was back\n",
                 rec->id);
-    if (ljgap_jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL) !=
+    if (ljgap__jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL) !=
         LJGAP_JOBSTORE_OK)
         log_store(js, "cannot evict finished jobs", NULL);
 }
 
 /* Finishes rec failed with a 500 problem of type slug. */
-static void finish_problem(ljgap_jobs *js, const ljgap_job_record *rec, const char *slug,
+static void finish_problem(ljgap__jobs *js, const ljgap__job_record *rec, const char *slug,
                            const char *title, const char *detail)
 {
-    char *p = ljgap_job_problem(500, slug, title, detail);
+    char *p = ljgap__job_problem(500, slug, title, detail);
     finish(js, rec, LJGAP_JOB_FAILED, p); /* NULL (out of memory): failed without a problem */
     free(p);
 }
 
 /* Runs claimed job rec in slot sl and writes its end. */
-static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
+static void execute(ljgap__jobs *js, slot *sl, const ljgap__job_record *rec)
 {
-    const ljgap_job_kind *kind = find_kind(js, rec->kind);
-    ljgap_job_ctl ctl = {&sl->cancel, on_progress, sl};
-    ljgap_reply rep = {0};
+    const ljgap__job_kind *kind = find_kind(js, rec->kind);
+    ljgap__job_ctl ctl = {&sl->cancel, on_progress, sl};
+    ljgap__reply rep = {0};
     char detail[300];
     int asked, lost, stopping, done, ok;
 
@@ -215,7 +215,7 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
     stopping = js->stopping;
     pthread_mutex_unlock(&js->lock);
     done = rep.status >= 200 && rep.status < 300;
-    ok = rep.body && ljgap_job_answer_ok(rep.body, rep.len, !done);
+    ok = rep.body && ljgap__job_answer_ok(rep.body, rep.len, !done);
     if (lost) {
         fprintf(stderr,
                 "ljgapd: job %s: its lease lapsed and it was claimed again; this run "
@@ -226,7 +226,7 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
     } else if (asked) {
         finish(js, rec, LJGAP_JOB_CANCELLED, ok ? rep.body : NULL);
     } else if (stopping) { /* stopped by the shutdown: it runs again at the next start */
-        if (ljgap_jobstore_release(js->store, rec->id, rec->run) == LJGAP_JOBSTORE_ERROR)
+        if (ljgap__jobstore_release(js->store, rec->id, rec->run) == LJGAP_JOBSTORE_ERROR)
             log_store(js, "cannot put back job", rec->id);
     } else if (ok) {
         finish(js, rec, LJGAP_JOB_FAILED, rep.body);
@@ -237,32 +237,32 @@ static void execute(ljgap_jobs *js, slot *sl, const ljgap_job_record *rec)
                                   "(or not a problem document)"
                                 : "the job ran out of memory");
     }
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
 }
 
 static void *worker(void *arg)
 {
     slot *sl = arg;
-    ljgap_jobs *js = sl->js;
+    ljgap__jobs *js = sl->js;
     pthread_mutex_lock(&js->lock);
     while (!js->stopping) {
-        ljgap_job_record rec;
+        ljgap__job_record rec;
         unsigned long seen = js->submitted;
         int st;
         pthread_mutex_unlock(&js->lock);
-        st = ljgap_jobstore_claim(js->store, js->owner, js->cfg.lease_seconds, &rec);
+        st = ljgap__jobstore_claim(js->store, js->owner, js->cfg.lease_seconds, &rec);
         if (st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_EMPTY) log_store(js, "claim", NULL);
         pthread_mutex_lock(&js->lock);
         if (st != LJGAP_JOBSTORE_OK) {
-            struct timespec until = ljgap_deadline_in(js->cfg.poll_seconds);
+            struct timespec until = ljgap__deadline_in(js->cfg.poll_seconds);
             if (!js->stopping && js->submitted == seen)
                 pthread_cond_timedwait(&js->work, &js->lock, &until);
             continue;
         }
         if (js->stopping) { /* claimed as we stop: give it back untouched */
             pthread_mutex_unlock(&js->lock);
-            ljgap_jobstore_release(js->store, rec.id, rec.run);
-            ljgap_job_record_clear(&rec);
+            ljgap__jobstore_release(js->store, rec.id, rec.run);
+            ljgap__job_record_clear(&rec);
             pthread_mutex_lock(&js->lock);
             break;
         }
@@ -277,7 +277,7 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&js->lock);
 
         execute(js, sl, &rec);
-        ljgap_job_record_clear(&rec);
+        ljgap__job_record_clear(&rec);
 
         pthread_mutex_lock(&js->lock);
         sl->busy = 0;
@@ -290,7 +290,7 @@ static void *worker(void *arg)
 /* ---- the keeper ---- */
 
 /* Renews slot sl if it is due (lock held; released around the store call). */
-static void keep_slot(ljgap_jobs *js, slot *sl, double now)
+static void keep_slot(ljgap__jobs *js, slot *sl, double now)
 {
     char id[LJGAP_JOB_ID_LEN + 1];
     long run = sl->run;
@@ -302,7 +302,7 @@ static void keep_slot(ljgap_jobs *js, slot *sl, double now)
         return;
     memcpy(id, sl->id, sizeof id);
     pthread_mutex_unlock(&js->lock);
-    st = ljgap_jobstore_renew(js->store, id, run, progress, js->cfg.lease_seconds, &cancel);
+    st = ljgap__jobstore_renew(js->store, id, run, progress, js->cfg.lease_seconds, &cancel);
     if (st != LJGAP_JOBSTORE_OK && st != LJGAP_JOBSTORE_LOST) log_store(js, "renew", id);
     pthread_mutex_lock(&js->lock);
     if (!sl->busy || sl->run != run || strcmp(sl->id, id) != 0) return; /* it ended meanwhile */
@@ -317,22 +317,22 @@ static void keep_slot(ljgap_jobs *js, slot *sl, double now)
 
 static void *keeper(void *arg)
 {
-    ljgap_jobs *js = arg;
+    ljgap__jobs *js = arg;
     double tick = fmin(js->cfg.progress_seconds, js->cfg.lease_seconds / 3) / 2;
-    double next_evict = ljgap_clock_now() + EVICT_SECONDS;
+    double next_evict = ljgap__clock_now() + EVICT_SECONDS;
     pthread_mutex_lock(&js->lock);
     while (!js->keeper_quit) {
-        struct timespec until = ljgap_deadline_in(tick);
+        struct timespec until = ljgap__deadline_in(tick);
         double now;
         pthread_cond_timedwait(&js->finished, &js->lock, &until);
-        now = ljgap_clock_now();
+        now = ljgap__clock_now();
         for (unsigned w = 0; w < js->n_threads && !js->keeper_quit; w++)
             keep_slot(js, &js->slots[w], now);
         if (now >= next_evict && !js->keeper_quit) {
             int st;
             next_evict = now + EVICT_SECONDS;
             pthread_mutex_unlock(&js->lock);
-            st = ljgap_jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL);
+            st = ljgap__jobstore_evict(js->store, js->cfg.keep_done, js->cfg.keep_seconds, NULL);
             if (st != LJGAP_JOBSTORE_OK) log_store(js, "cannot evict finished jobs", NULL);
             pthread_mutex_lock(&js->lock);
         }
@@ -343,10 +343,10 @@ static void *keeper(void *arg)
 
 /* ---- the interface ---- */
 
-ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
-                             const ljgap_job_kind *kinds, size_t nkinds)
+ljgap__jobs *ljgap__jobs_alloc(const ljgap__jobs_config *c, ljgap__jobstore *store,
+                             const ljgap__job_kind *kinds, size_t nkinds)
 {
-    ljgap_jobs *js;
+    ljgap__jobs *js;
     char host[64] = "localhost";
     if (!c || !store || !kinds || !nkinds || c->workers < 1 || c->queue_cap < 1 ||
         !(c->keep_seconds >= 0) || !(c->lease_seconds > 0 && c->lease_seconds <= 86400) ||
@@ -354,7 +354,7 @@ ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
         !(c->poll_seconds > 0 && c->poll_seconds <= 3600))
         return NULL;
     for (size_t i = 0; i < nkinds; i++)
-        if (!ljgap_job_kind_valid(kinds[i].name) || !kinds[i].run) return NULL;
+        if (!ljgap__job_kind_valid(kinds[i].name) || !kinds[i].run) return NULL;
     if (!(js = calloc(1, sizeof *js))) return NULL;
     js->cfg = *c;
     js->store = store;
@@ -372,8 +372,8 @@ ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
     host[sizeof host - 1] = '\0';
     snprintf(js->owner, sizeof js->owner, "%s:%ld", host, (long)getpid());
     pthread_mutex_init(&js->lock, NULL);
-    ljgap_cond_init_monotonic(&js->work);
-    ljgap_cond_init_monotonic(&js->finished);
+    ljgap__cond_init_monotonic(&js->work);
+    ljgap__cond_init_monotonic(&js->finished);
     for (unsigned w = 0; w < c->workers; w++)
         js->slots[w].js = js;
     while (js->n_threads < c->workers && pthread_create(&js->threads[js->n_threads], NULL, worker,
@@ -382,13 +382,13 @@ ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
     js->keeper_started =
         js->n_threads == c->workers && pthread_create(&js->keeper, NULL, keeper, js) == 0;
     if (!js->keeper_started) {
-        ljgap_jobs_free(js);
+        ljgap__jobs_free(js);
         return NULL;
     }
     return js;
 }
 
-int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t len,
+int ljgap__jobs_submit(ljgap__jobs *js, const char *kind, const char *body, size_t len,
                       char id[LJGAP_JOB_ID_LEN + 1])
 {
     char fresh[LJGAP_JOB_ID_LEN + 1];
@@ -399,16 +399,16 @@ int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t
     pthread_mutex_unlock(&js->lock);
     if (stopping) return LJGAP_JOBS_STOPPING;
     if (!find_kind(js, kind)) {
-        ljgap_jobstore_set_errmsg("no job kind \"%.40s\"", kind);
+        ljgap__jobstore_set_errmsg("no job kind \"%.40s\"", kind);
         return LJGAP_JOBS_STORE;
     }
     /* 128 random bits: a second try is for the record, not for the odds */
     for (int i = 0; i < 3 && st == LJGAP_JOBSTORE_EXISTS; i++) {
-        if (ljgap_job_id_new(fresh) != 0) {
-            ljgap_jobstore_set_errmsg("no random bits for a job id");
+        if (ljgap__job_id_new(fresh) != 0) {
+            ljgap__jobstore_set_errmsg("no random bits for a job id");
             return LJGAP_JOBS_STORE;
         }
-        st = ljgap_jobstore_create(js->store, fresh, kind, body, len, js->cfg.queue_cap);
+        st = ljgap__jobstore_create(js->store, fresh, kind, body, len, js->cfg.queue_cap);
     }
     if (st != LJGAP_JOBSTORE_OK) return map_store(st);
     memcpy(id, fresh, sizeof fresh);
@@ -421,38 +421,38 @@ int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t
 
 /* Has finished job rec outlived keep_seconds? (Eviction removes it soon; until then it is
  * not shown.) */
-static int expired(const ljgap_jobs *js, const ljgap_job_record *rec)
+static int expired(const ljgap__jobs *js, const ljgap__job_record *rec)
 {
     return rec->state >= LJGAP_JOB_DONE && rec->finished > 0 &&
            rec->now - rec->finished > js->cfg.keep_seconds;
 }
 
 /* The status of rec into *json; the status code. */
-static int render(ljgap_jobs *js, const ljgap_job_record *rec, char **json)
+static int render(ljgap__jobs *js, const ljgap__job_record *rec, char **json)
 {
     if (expired(js, rec)) return LJGAP_JOBS_UNKNOWN;
-    return (*json = ljgap_job_status_json(rec)) ? LJGAP_JOBS_OK : LJGAP_JOBS_NOMEM;
+    return (*json = ljgap__job_status_json(rec)) ? LJGAP_JOBS_OK : LJGAP_JOBS_NOMEM;
 }
 
-int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json)
+int ljgap__jobs_status(ljgap__jobs *js, const char *id, char **json)
 {
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     int st;
     *json = NULL;
-    st = map_store(ljgap_jobstore_get(js->store, id, &rec));
+    st = map_store(ljgap__jobstore_get(js->store, id, &rec));
     if (st == LJGAP_JOBS_OK) st = render(js, &rec, json);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     return st;
 }
 
-int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final)
+int ljgap__jobs_cancel(ljgap__jobs *js, const char *id, double wait_s, char **json, int *final)
 {
-    double until = ljgap_clock_now() + (wait_s > 0 ? fmin(wait_s, 1e6) : 0);
-    ljgap_job_record rec;
+    double until = ljgap__clock_now() + (wait_s > 0 ? fmin(wait_s, 1e6) : 0);
+    ljgap__job_record rec;
     int st;
     *json = NULL;
     *final = 0;
-    st = map_store(ljgap_jobstore_cancel(js->store, id, &rec));
+    st = map_store(ljgap__jobstore_cancel(js->store, id, &rec));
     if (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING) {
         pthread_mutex_lock(&js->lock);
         for (unsigned w = 0; w < js->n_threads; w++) {
@@ -461,29 +461,29 @@ int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json
         }
         pthread_mutex_unlock(&js->lock);
     }
-    while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap_clock_now() < until) {
+    while (st == LJGAP_JOBS_OK && rec.state == LJGAP_JOB_RUNNING && ljgap__clock_now() < until) {
         /* woken when a job here returns; a job running elsewhere is looked at every 0.1 s */
-        struct timespec t = ljgap_deadline_in(fmin(until - ljgap_clock_now(), 0.1));
+        struct timespec t = ljgap__deadline_in(fmin(until - ljgap__clock_now(), 0.1));
         pthread_mutex_lock(&js->lock);
         pthread_cond_timedwait(&js->finished, &js->lock, &t);
         pthread_mutex_unlock(&js->lock);
-        ljgap_job_record_clear(&rec);
-        st = map_store(ljgap_jobstore_get(js->store, id, &rec));
+        ljgap__job_record_clear(&rec);
+        st = map_store(ljgap__jobstore_get(js->store, id, &rec));
     }
     if (st == LJGAP_JOBS_OK) {
         *final = rec.state != LJGAP_JOB_RUNNING && rec.state != LJGAP_JOB_QUEUED;
         st = render(js, &rec, json);
     }
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     return st;
 }
 
-int ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running)
+int ljgap__jobs_counts(ljgap__jobs *js, unsigned *queued, unsigned *running)
 {
-    return map_store(ljgap_jobstore_counts(js->store, queued, running));
+    return map_store(ljgap__jobstore_counts(js->store, queued, running));
 }
 
-void ljgap_jobs_shutdown(ljgap_jobs *js)
+void ljgap__jobs_shutdown(ljgap__jobs *js)
 {
     pthread_mutex_lock(&js->lock);
     js->stopping = 1;
@@ -493,16 +493,16 @@ void ljgap_jobs_shutdown(ljgap_jobs *js)
     pthread_mutex_unlock(&js->lock);
 }
 
-static int any_busy(const ljgap_jobs *js)
+static int any_busy(const ljgap__jobs *js)
 {
     for (unsigned w = 0; w < js->n_threads; w++)
         if (js->slots[w].busy) return 1;
     return 0;
 }
 
-int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s)
+int ljgap__jobs_wait_idle(ljgap__jobs *js, double wait_s)
 {
-    struct timespec until = ljgap_deadline_in(wait_s);
+    struct timespec until = ljgap__deadline_in(wait_s);
     int idle;
     pthread_mutex_lock(&js->lock);
     while (any_busy(js) && pthread_cond_timedwait(&js->finished, &js->lock, &until) == 0)
@@ -512,10 +512,10 @@ int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s)
     return idle;
 }
 
-void ljgap_jobs_free(ljgap_jobs *js)
+void ljgap__jobs_free(ljgap__jobs *js)
 {
     if (!js) return;
-    ljgap_jobs_shutdown(js);
+    ljgap__jobs_shutdown(js);
     for (unsigned t = 0; t < js->n_threads; t++)
         pthread_join(js->threads[t], NULL);
     if (js->keeper_started) {

@@ -9,12 +9,12 @@
  * shared store another daemon does, once the lost job's lease lapses. The runner knows nothing of
  * physics or HTTP: kinds are functions given at start.
  *
- *   ljgap_jobs *js = ljgap_jobs_alloc(&cfg, store, kinds, nkinds);   workers start here
- *   ljgap_jobs_submit(js, "simulation", body, len, id);   durable, or LJGAP_JOBS_FULL
- *   ljgap_jobs_status(js, id, &json);                     {"id","status","progress",...}
- *   ljgap_jobs_cancel(js, id, wait_s, &json, &final);     cancel, then the same status object
- *   ljgap_jobs_shutdown(js);                              at SIGTERM: stop the running ones
- *   ljgap_jobs_free(js);                                  join the workers
+ *   ljgap__jobs *js = ljgap__jobs_alloc(&cfg, store, kinds, nkinds);   workers start here
+ *   ljgap__jobs_submit(js, "simulation", body, len, id);   durable, or LJGAP_JOBS_FULL
+ *   ljgap__jobs_status(js, id, &json);                     {"id","status","progress",...}
+ *   ljgap__jobs_cancel(js, id, wait_s, &json, &final);     cancel, then the same status object
+ *   ljgap__jobs_shutdown(js);                              at SIGTERM: stop the running ones
+ *   ljgap__jobs_free(js);                                  join the workers
  *
  * States (jobstore.h): queued -> running -> done | failed | cancelled. A run whose reply is
  * 2xx is done; a run that returns a problem is failed, or cancelled when a cancel was asked.
@@ -42,16 +42,16 @@ typedef struct {
     const volatile int *cancel;                   /* nonzero: stop early (ljgap_sim_opts.cancel) */
     void (*progress)(void *ctx, double fraction); /* fraction done, 0..1; cheap, no I/O */
     void *ctx;                                    /* first argument of progress */
-} ljgap_job_ctl;
+} ljgap__job_ctl;
 
 /* A kind of job: its name and the function that runs a stored request body of that kind,
  * filling *out (a 2xx JSON answer, or a problem; a body that does not parse is a problem). */
 typedef struct {
     const char *name; /* jobstore.h kind name, e.g. "simulation" */
-    void (*run)(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
-                ljgap_reply *out);
+    void (*run)(void *ctx, const char *body, size_t len, const ljgap__job_ctl *ctl,
+                ljgap__reply *out);
     void *ctx; /* first argument of run */
-} ljgap_job_kind;
+} ljgap__job_kind;
 
 typedef struct {
     unsigned workers;        /* worker threads, jobs running at once (default 1) */
@@ -62,11 +62,11 @@ typedef struct {
     double progress_seconds; /* progress is written at most this often (default 0.5 s) */
     double poll_seconds;     /* idle workers look at the store this often (default 1 s) */
     unsigned max_lost;       /* a job whose runs were lost this often fails (default 3) */
-} ljgap_jobs_config;
+} ljgap__jobs_config;
 
-void ljgap_jobs_config_default(ljgap_jobs_config *c);
+void ljgap__jobs_config_default(ljgap__jobs_config *c);
 
-typedef struct ljgap_jobs ljgap_jobs;
+typedef struct ljgap__jobs ljgap__jobs;
 
 /* Status codes of submit, status and cancel. */
 enum {
@@ -75,43 +75,43 @@ enum {
     LJGAP_JOBS_STOPPING = 2, /* submit: shutting down, no new jobs */
     LJGAP_JOBS_UNKNOWN = 3,  /* status/cancel: no job with that id (never was, or evicted) */
     LJGAP_JOBS_NOMEM = 4,    /* an allocation failed */
-    LJGAP_JOBS_STORE = 5,    /* the job store failed: ljgap_jobstore_errmsg() says why */
+    LJGAP_JOBS_STORE = 5,    /* the job store failed: ljgap__jobstore_errmsg() says why */
 };
 
-/* Starts the workers on store (which stays the caller's, to close after ljgap_jobs_free).
+/* Starts the workers on store (which stays the caller's, to close after ljgap__jobs_free).
  * kinds[0..nkinds) are copied. NULL if the configuration is bad or memory or threads run
  * out (nothing is left behind). */
-ljgap_jobs *ljgap_jobs_alloc(const ljgap_jobs_config *c, ljgap_jobstore *store,
-                             const ljgap_job_kind *kinds, size_t nkinds);
+ljgap__jobs *ljgap__jobs_alloc(const ljgap__jobs_config *c, ljgap__jobstore *store,
+                             const ljgap__job_kind *kinds, size_t nkinds);
 
 /* Stores a job of the given kind (one of the kinds given at alloc) with the request body,
  * queued. LJGAP_JOBS_OK means it is committed to the store: it survives a crash from here on.
  * id receives its id (LJGAP_JOB_ID_LEN hex digits and a NUL; "" on failure). */
-int ljgap_jobs_submit(ljgap_jobs *js, const char *kind, const char *body, size_t len,
+int ljgap__jobs_submit(ljgap__jobs *js, const char *kind, const char *body, size_t len,
                       char id[LJGAP_JOB_ID_LEN + 1]);
 
 /* The status object of job id as a malloc'd JSON string (jobstatus.h). */
-int ljgap_jobs_status(ljgap_jobs *js, const char *id, char **json);
+int ljgap__jobs_status(ljgap__jobs *js, const char *id, char **json);
 
 /* Cancels job id: a queued job is cancelled at once; a running one is told to stop (at once
  * when it runs here, at its next lease renewal elsewhere) and waited for up to wait_s seconds;
  * a finished one is left as it is. *json receives the status afterwards (as
- * ljgap_jobs_status); *final is 1 when the job has finished (in any state), 0 when it is still
+ * ljgap__jobs_status); *final is 1 when the job has finished (in any state), 0 when it is still
  * running. */
-int ljgap_jobs_cancel(ljgap_jobs *js, const char *id, double wait_s, char **json, int *final);
+int ljgap__jobs_cancel(ljgap__jobs *js, const char *id, double wait_s, char **json, int *final);
 
 /* Number of jobs queued and running now (in the whole store); 0 or LJGAP_JOBS_STORE. */
-int ljgap_jobs_counts(ljgap_jobs *js, unsigned *queued, unsigned *running);
+int ljgap__jobs_counts(ljgap__jobs *js, unsigned *queued, unsigned *running);
 
 /* Refuses new jobs, stops claiming and raises the cancel flag of the jobs running here, which
  * go back to the queue when they return. Returns at once. */
-void ljgap_jobs_shutdown(ljgap_jobs *js);
+void ljgap__jobs_shutdown(ljgap__jobs *js);
 
 /* Waits up to wait_s seconds for the jobs running here to return; 1 when none is running. */
-int ljgap_jobs_wait_idle(ljgap_jobs *js, double wait_s);
+int ljgap__jobs_wait_idle(ljgap__jobs *js, double wait_s);
 
 /* Shuts down (if not yet), joins the threads and frees everything but the store. NULL is
  * fine. */
-void ljgap_jobs_free(ljgap_jobs *js);
+void ljgap__jobs_free(ljgap__jobs *js);
 
 #endif

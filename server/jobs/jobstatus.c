@@ -9,7 +9,7 @@
  */
 #include "jobstatus.h"
 #include "request.h"
-#include "textbuf.h" /* ljgap_utf8_span */
+#include "textbuf.h" /* ljgap__utf8_span */
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -29,12 +29,12 @@ static int all_finite(const cJSON *v)
     return 1;
 }
 
-/* The answer parsed, when it passes ljgap_job_answer_ok's checks; else NULL. */
+/* The answer parsed, when it passes ljgap__job_answer_ok's checks; else NULL. */
 static cJSON *answer_parse(const char *answer, size_t len)
 {
     const char *end = NULL;
     cJSON *doc;
-    if (!answer || len == 0 || strlen(answer) != len || ljgap_utf8_span(answer, len) != len)
+    if (!answer || len == 0 || strlen(answer) != len || ljgap__utf8_span(answer, len) != len)
         return NULL;
     doc = cJSON_ParseWithLengthOpts(answer, len, &end, 0);
     while (doc && end && end < answer + len && strchr(" \t\r\n", *end))
@@ -60,7 +60,7 @@ static cJSON *problem_object(int status, const char *slug, const char *title, co
     return NULL;
 }
 
-char *ljgap_job_problem(int status, const char *slug, const char *title, const char *detail)
+char *ljgap__job_problem(int status, const char *slug, const char *title, const char *detail)
 {
     cJSON *p = problem_object(status, slug, title, detail);
     char *s = p ? cJSON_PrintUnformatted(p) : NULL;
@@ -68,7 +68,7 @@ char *ljgap_job_problem(int status, const char *slug, const char *title, const c
     return s;
 }
 
-void ljgap_rfc3339(double t, char *buf, size_t size)
+void ljgap__rfc3339(double t, char *buf, size_t size)
 {
     long long ms = llround(t * 1e3);
     time_t sec = (time_t)(ms / 1000);
@@ -91,7 +91,7 @@ static int add_time(cJSON *o, const char *key, double t)
 {
     char buf[40];
     if (t <= 0) return 1; /* not (yet): not shown */
-    ljgap_rfc3339(t, buf, sizeof buf);
+    ljgap__rfc3339(t, buf, sizeof buf);
     return cJSON_AddStringToObject(o, key, buf) != NULL;
 }
 
@@ -124,7 +124,7 @@ static int is_problem(const cJSON *p)
     return 1;
 }
 
-int ljgap_job_answer_ok(const char *answer, size_t len, int problem)
+int ljgap__job_answer_ok(const char *answer, size_t len, int problem)
 {
     cJSON *doc = answer_parse(answer, len);
     int ok = doc && (!problem || is_problem(doc));
@@ -134,7 +134,7 @@ int ljgap_job_answer_ok(const char *answer, size_t len, int problem)
 
 /* Why rec cannot be shown as stored, or NULL when it can; *answer receives its answer parsed
  * (NULL when it has none to show). */
-static const char *damage_of(const ljgap_job_record *rec, cJSON **answer)
+static const char *damage_of(const ljgap__job_record *rec, cJSON **answer)
 {
     *answer = NULL;
     if (rec->state == LJGAP_JOB_BAD)
@@ -151,9 +151,9 @@ static const char *damage_of(const ljgap_job_record *rec, cJSON **answer)
 }
 
 /* The status object; with damage not NULL, the record is shown as damaged for that reason. */
-static char *status_json(const ljgap_job_record *rec, const char *damage)
+static char *status_json(const ljgap__job_record *rec, const char *damage)
 {
-    ljgap_job_state state = rec->state;
+    ljgap__job_state state = rec->state;
     double created = sound_time(rec->created), started = sound_time(rec->started);
     double finished = sound_time(rec->finished), now = sound_time(rec->now);
     double progress = isfinite(rec->progress) ? fmin(fmax(rec->progress, 0), 1) : 0;
@@ -181,8 +181,8 @@ static char *status_json(const ljgap_job_record *rec, const char *damage)
     else if (state != LJGAP_JOB_QUEUED)
         elapsed = span_ms(started, finished);
 
-    if (!cJSON_AddStringToObject(o, "id", ljgap_job_id_valid(rec->id) ? rec->id : "") ||
-        !cJSON_AddStringToObject(o, "status", ljgap_job_state_name(state)) ||
+    if (!cJSON_AddStringToObject(o, "id", ljgap__job_id_valid(rec->id) ? rec->id : "") ||
+        !cJSON_AddStringToObject(o, "status", ljgap__job_state_name(state)) ||
         !cJSON_AddNumberToObject(o, "progress", progress) ||
         !cJSON_AddNumberToObject(o, "elapsed_ms", elapsed) || !add_time(o, "created", created) ||
         (state != LJGAP_JOB_QUEUED && !add_time(o, "started", started)) ||
@@ -194,7 +194,7 @@ static char *status_json(const ljgap_job_record *rec, const char *damage)
     }
     out = cJSON_PrintUnformatted(o);
     /* cJSON turns \u escapes into bytes: a lone surrogate would come out as invalid UTF-8 */
-    if (out && ljgap_utf8_span(out, strlen(out)) != strlen(out) && !damage) {
+    if (out && ljgap__utf8_span(out, strlen(out)) != strlen(out) && !damage) {
         cJSON_free(out);
         cJSON_Delete(o);
         return status_json(rec, "its answer is not valid UTF-8 once unescaped");
@@ -205,7 +205,7 @@ end:
     return out;
 }
 
-char *ljgap_job_status_json(const ljgap_job_record *rec)
+char *ljgap__job_status_json(const ljgap__job_record *rec)
 {
     return status_json(rec, NULL);
 }

@@ -22,17 +22,17 @@
  * answer, e.g. at shutdown; the job runs again from the start). Finished jobs are removed by
  * evict, never by anything else.
  *
- *   ljgap_jobstore *st;  char err[300];
- *   if (ljgap_jobstore_open_sqlite("/var/lib/ljgapd", &st, err, sizeof err)) fail(err);
- *   ljgap_jobstore_create(st, id, "simulation", body, len, 8);     HTTP thread: queue it
- *   ljgap_jobstore_claim(st, "host:pid", 30, &rec);                worker: take the oldest
- *   ljgap_jobstore_renew(st, rec.id, rec.run, 0.4, 30, &cancel);   worker, now and then
- *   ljgap_jobstore_finish(st, rec.id, rec.run, LJGAP_JOB_DONE, answer, n);
- *   ljgap_jobstore_get(st, id, &rec);  ...  ljgap_job_record_clear(&rec);
- *   ljgap_jobstore_close(st);
+ *   ljgap__jobstore *st;  char err[300];
+ *   if (ljgap__jobstore_open_sqlite("/var/lib/ljgapd", &st, err, sizeof err)) fail(err);
+ *   ljgap__jobstore_create(st, id, "simulation", body, len, 8);     HTTP thread: queue it
+ *   ljgap__jobstore_claim(st, "host:pid", 30, &rec);                worker: take the oldest
+ *   ljgap__jobstore_renew(st, rec.id, rec.run, 0.4, 30, &cancel);   worker, now and then
+ *   ljgap__jobstore_finish(st, rec.id, rec.run, LJGAP_JOB_DONE, answer, n);
+ *   ljgap__jobstore_get(st, id, &rec);  ...  ljgap__job_record_clear(&rec);
+ *   ljgap__jobstore_close(st);
  *
  * Every operation is thread-safe and returns one of the LJGAP_JOBSTORE_* codes; when it is
- * LJGAP_JOBSTORE_ERROR, ljgap_jobstore_errmsg() gives the calling thread the reason (like
+ * LJGAP_JOBSTORE_ERROR, ljgap__jobstore_errmsg() gives the calling thread the reason (like
  * errno). Records read back are input like any other: a backend maps what it reads onto the
  * record's types (an unknown state becomes LJGAP_JOB_BAD) and never trusts a text column to
  * be valid JSON or UTF-8; jobstatus.h checks records before they reach a client.
@@ -52,14 +52,14 @@ typedef enum {
     LJGAP_JOB_FAILED,
     LJGAP_JOB_CANCELLED,
     LJGAP_JOB_BAD, /* read back: the stored state is none of the above (a damaged row) */
-} ljgap_job_state;
+} ljgap__job_state;
 
 /* One job as read back from the store. Strings are what the row holds: checked for length,
  * not for content. */
 typedef struct {
     char id[LJGAP_JOB_ID_LEN + 1];     /* as stored (claim) or as asked for (get, cancel) */
     char kind[LJGAP_JOB_KIND_MAX + 1]; /* as stored; "" if it did not fit */
-    ljgap_job_state state;             /* LJGAP_JOB_BAD if the row's state is unknown */
+    ljgap__job_state state;             /* LJGAP_JOB_BAD if the row's state is unknown */
     double progress;                   /* as stored (0..1 when the row is sound) */
     double created, started, finished; /* store clock, Unix seconds; 0 = not (yet) */
     double now;                        /* the store's clock when this was read */
@@ -70,7 +70,7 @@ typedef struct {
     size_t request_len;                /* its length in bytes (it may hold NULs) */
     char *answer;                      /* result (done) or problem (failed, cancelled) text, */
     size_t answer_len;                 /* NUL-terminated, or NULL; its length in bytes */
-} ljgap_job_record;
+} ljgap__job_record;
 
 /* Status codes of every operation. */
 enum {
@@ -82,11 +82,11 @@ enum {
     LJGAP_JOBSTORE_LOST = 5,    /* renew, finish, release: this claim is no longer current (the
                                  * lease lapsed and the job was claimed again, or it ended) */
     LJGAP_JOBSTORE_NOMEM = 6,   /* an allocation failed */
-    LJGAP_JOBSTORE_ERROR = 7,   /* the database failed or refused: see ljgap_jobstore_errmsg */
+    LJGAP_JOBSTORE_ERROR = 7,   /* the database failed or refused: see ljgap__jobstore_errmsg */
     LJGAP_JOBSTORE_INVALID = 8, /* a bad argument (an id that is not 32 hex digits, ...) */
 };
 
-typedef struct ljgap_jobstore ljgap_jobstore;
+typedef struct ljgap__jobstore ljgap__jobstore;
 
 /* The operations a backend implements. The public functions below check their arguments and
  * call these; a backend may rely on: ids are 32 lower-case hex digits, kinds are 1 to
@@ -94,24 +94,24 @@ typedef struct ljgap_jobstore ljgap_jobstore;
  * [0, 1], answers are NUL-terminated with answer_len = strlen. */
 typedef struct {
     const char *name; /* "sqlite" */
-    int (*create)(ljgap_jobstore *st, const char *id, const char *kind, const char *request,
+    int (*create)(ljgap__jobstore *st, const char *id, const char *kind, const char *request,
                   size_t len, unsigned max_queued);
-    int (*claim)(ljgap_jobstore *st, const char *owner, double lease_s, ljgap_job_record *rec);
-    int (*renew)(ljgap_jobstore *st, const char *id, long run, double progress, double lease_s,
+    int (*claim)(ljgap__jobstore *st, const char *owner, double lease_s, ljgap__job_record *rec);
+    int (*renew)(ljgap__jobstore *st, const char *id, long run, double progress, double lease_s,
                  int *cancel);
-    int (*finish)(ljgap_jobstore *st, const char *id, long run, ljgap_job_state state,
+    int (*finish)(ljgap__jobstore *st, const char *id, long run, ljgap__job_state state,
                   const char *answer, size_t answer_len);
-    int (*release)(ljgap_jobstore *st, const char *id, long run);
-    int (*get)(ljgap_jobstore *st, const char *id, ljgap_job_record *rec);
-    int (*cancel)(ljgap_jobstore *st, const char *id, ljgap_job_record *rec);
-    int (*counts)(ljgap_jobstore *st, unsigned *queued, unsigned *running);
-    int (*evict)(ljgap_jobstore *st, unsigned keep_done, double keep_seconds, unsigned *evicted);
-    void (*close)(ljgap_jobstore *st);
-} ljgap_jobstore_ops;
+    int (*release)(ljgap__jobstore *st, const char *id, long run);
+    int (*get)(ljgap__jobstore *st, const char *id, ljgap__job_record *rec);
+    int (*cancel)(ljgap__jobstore *st, const char *id, ljgap__job_record *rec);
+    int (*counts)(ljgap__jobstore *st, unsigned *queued, unsigned *running);
+    int (*evict)(ljgap__jobstore *st, unsigned keep_done, double keep_seconds, unsigned *evicted);
+    void (*close)(ljgap__jobstore *st);
+} ljgap__jobstore_ops;
 
 /* The head of every backend's handle (a backend's struct starts with it). */
-struct ljgap_jobstore {
-    const ljgap_jobstore_ops *ops;
+struct ljgap__jobstore {
+    const ljgap__jobstore_ops *ops;
     const char *where; /* for messages: the database file, or the URL without its password */
 };
 
@@ -124,7 +124,7 @@ struct ljgap_jobstore {
  * LJGAP_JOBSTORE_ERROR (or NOMEM) with one line in err naming the path and the reason: missing
  * and uncreatable, not a directory, not writable, in use by another process, not a database,
  * corrupt, a schema newer than this program knows. */
-int ljgap_jobstore_open_sqlite(const char *dir, ljgap_jobstore **out, char *err, size_t errlen);
+int ljgap__jobstore_open_sqlite(const char *dir, ljgap__jobstore **out, char *err, size_t errlen);
 
 /* Opens the PostgreSQL job store at url (postgresql://[user[:password]@]host[:port]/dbname[?...],
  * or postgres://; anything libpq takes in a URI), shared by every daemon pointed at it: connects
@@ -137,7 +137,7 @@ int ljgap_jobstore_open_sqlite(const char *dir, ljgap_jobstore **out, char *err,
  * once (LJGAP_JOBSTORE_ERROR) and one of them tries to reconnect every second. On failure
  * returns LJGAP_JOBSTORE_ERROR, NOMEM or INVALID (not such a URL) with one line in err naming
  * the database (never the password) and the reason. */
-int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore **out, char *err,
+int ljgap__jobstore_open_pg(const char *url, unsigned max_conns, ljgap__jobstore **out, char *err,
                            size_t errlen);
 
 /* The columns of one job row as the PostgreSQL backend reads them, in text format: */
@@ -161,81 +161,81 @@ enum {
  * is LJGAP_PG_REQUEST or LJGAP_PG_COLS), trusting none of them: a text that does not fit is "",
  * an unknown state LJGAP_JOB_BAD, a number that does not parse 0, a request that is not hex
  * empty. 0, or LJGAP_JOBSTORE_NOMEM (rec cleared). The backend's reading, and the fuzzer's. */
-int ljgap_jobstore_pg_row(ljgap_job_record *rec, const char *const *val, const int *len, int ncols);
+int ljgap__jobstore_pg_row(ljgap__job_record *rec, const char *const *val, const int *len, int ncols);
 
 /* Closes the store (NULL is fine). Running jobs stay as they are in the database. */
-void ljgap_jobstore_close(ljgap_jobstore *st);
+void ljgap__jobstore_close(ljgap__jobstore *st);
 
 /* ---- operations ---- */
 
-/* Adds job id (fresh: ljgap_job_id_new) of the given kind with the request bytes, queued,
+/* Adds job id (fresh: ljgap__job_id_new) of the given kind with the request bytes, queued,
  * created now, unless max_queued or more jobs are queued (LJGAP_JOBSTORE_FULL; 0 = no cap) or
  * the id exists (LJGAP_JOBSTORE_EXISTS). LJGAP_JOBSTORE_OK means the row is durable: it is
  * committed to stable storage before this returns. */
-int ljgap_jobstore_create(ljgap_jobstore *st, const char *id, const char *kind, const char *request,
+int ljgap__jobstore_create(ljgap__jobstore *st, const char *id, const char *kind, const char *request,
                           size_t len, unsigned max_queued);
 
 /* Claims the oldest job that is queued, or running with a lapsed lease (then lost + 1), for
  * owner (a name for diagnostics): it becomes running with run + 1, started now, progress 0 and
  * a lease of lease_s seconds. *rec receives it, with its request; the caller runs it unless
  * rec->cancel is set (cancel requested during a lost run: finish it cancelled). */
-int ljgap_jobstore_claim(ljgap_jobstore *st, const char *owner, double lease_s,
-                         ljgap_job_record *rec);
+int ljgap__jobstore_claim(ljgap__jobstore *st, const char *owner, double lease_s,
+                         ljgap__job_record *rec);
 
 /* While running claim `run` of job id: raises its progress to `progress` (never lowers it),
  * extends its lease to now + lease_s and sets *cancel to 1 if a cancel was requested. */
-int ljgap_jobstore_renew(ljgap_jobstore *st, const char *id, long run, double progress,
+int ljgap__jobstore_renew(ljgap__jobstore *st, const char *id, long run, double progress,
                          double lease_s, int *cancel);
 
 /* Ends claim `run` of job id in state done, failed or cancelled, finished now, with answer
  * (answer_len bytes; NULL for none). Done sets progress to 1. */
-int ljgap_jobstore_finish(ljgap_jobstore *st, const char *id, long run, ljgap_job_state state,
+int ljgap__jobstore_finish(ljgap__jobstore *st, const char *id, long run, ljgap__job_state state,
                           const char *answer, size_t answer_len);
 
 /* Gives claim `run` of job id back: queued again, progress 0, in its old place in the queue. */
-int ljgap_jobstore_release(ljgap_jobstore *st, const char *id, long run);
+int ljgap__jobstore_release(ljgap__jobstore *st, const char *id, long run);
 
 /* The record of job id (without its request). */
-int ljgap_jobstore_get(ljgap_jobstore *st, const char *id, ljgap_job_record *rec);
+int ljgap__jobstore_get(ljgap__jobstore *st, const char *id, ljgap__job_record *rec);
 
 /* Requests the cancel of job id: a queued job is cancelled now (finished, no answer); a
  * running one is flagged (its worker sees the flag at its next renew, or at once through the
  * runner when it runs in this process); a finished one is left as it is. *rec receives the
  * record afterwards. */
-int ljgap_jobstore_cancel(ljgap_jobstore *st, const char *id, ljgap_job_record *rec);
+int ljgap__jobstore_cancel(ljgap__jobstore *st, const char *id, ljgap__job_record *rec);
 
 /* Jobs queued and running now (running includes lapsed leases not yet claimed again). */
-int ljgap_jobstore_counts(ljgap_jobstore *st, unsigned *queued, unsigned *running);
+int ljgap__jobstore_counts(ljgap__jobstore *st, unsigned *queued, unsigned *running);
 
 /* Removes finished jobs (done, failed, cancelled) that finished more than keep_seconds ago,
  * then the oldest finished beyond the keep_done most recent. *evicted (may be NULL) receives
  * the number removed. */
-int ljgap_jobstore_evict(ljgap_jobstore *st, unsigned keep_done, double keep_seconds,
+int ljgap__jobstore_evict(ljgap__jobstore *st, unsigned keep_done, double keep_seconds,
                          unsigned *evicted);
 
 /* ---- helpers shared by backends and callers ---- */
 
 /* The calling thread's reason for its last LJGAP_JOBSTORE_ERROR ("" if none). */
-const char *ljgap_jobstore_errmsg(void);
+const char *ljgap__jobstore_errmsg(void);
 /* Sets it (printf-style): for backends. */
-void ljgap_jobstore_set_errmsg(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void ljgap__jobstore_set_errmsg(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 /* A fresh random id (128 bits from getrandom, in hex); 0, or -1 if no randomness. */
-int ljgap_job_id_new(char id[LJGAP_JOB_ID_LEN + 1]);
+int ljgap__job_id_new(char id[LJGAP_JOB_ID_LEN + 1]);
 /* Is s exactly LJGAP_JOB_ID_LEN lower-case hex digits? */
-int ljgap_job_id_valid(const char *s);
+int ljgap__job_id_valid(const char *s);
 /* Is s a kind name (1 to LJGAP_JOB_KIND_MAX of [a-z0-9_])? */
-int ljgap_job_kind_valid(const char *s);
+int ljgap__job_kind_valid(const char *s);
 
 /* "queued", "running", "done", "failed", "cancelled" (NULL for LJGAP_JOB_BAD), and back
  * (LJGAP_JOB_BAD for anything else, NULL included). */
-const char *ljgap_job_state_name(ljgap_job_state s);
-ljgap_job_state ljgap_job_state_parse(const char *s);
+const char *ljgap__job_state_name(ljgap__job_state s);
+ljgap__job_state ljgap__job_state_parse(const char *s);
 
 /* Frees a record's request and answer and zeroes it (NULL is fine). */
-void ljgap_job_record_clear(ljgap_job_record *rec);
+void ljgap__job_record_clear(ljgap__job_record *rec);
 
 /* The store's clock for backends that have none of their own: CLOCK_REALTIME in seconds. */
-double ljgap_jobstore_wallclock(void);
+double ljgap__jobstore_wallclock(void);
 
 #endif

@@ -32,7 +32,7 @@
  * So the HTTP job routes answer 503 quickly while the database is away, and work again when it
  * is back.
  *
- * Reading back: rows come in libpq's text format and are parsed by ljgap_jobstore_pg_row, which
+ * Reading back: rows come in libpq's text format and are parsed by ljgap__jobstore_pg_row, which
  * trusts nothing (the fuzzer feeds it); jobstatus.h checks the record before a client sees it.
  *
  * Secrets: the URL may hold a password. Messages name the database as
@@ -180,13 +180,13 @@ static long integer(const char *val, int len)
     return end != buf && *end == '\0' && errno == 0 ? v : 0;
 }
 
-int ljgap_jobstore_pg_row(ljgap_job_record *rec, const char *const *val, const int *len, int ncols)
+int ljgap__jobstore_pg_row(ljgap__job_record *rec, const char *const *val, const int *len, int ncols)
 {
     char state[16];
     text_short(val[LJGAP_PG_ID], len[LJGAP_PG_ID], rec->id, sizeof rec->id);
     text_short(val[LJGAP_PG_KIND], len[LJGAP_PG_KIND], rec->kind, sizeof rec->kind);
     text_short(val[LJGAP_PG_STATE], len[LJGAP_PG_STATE], state, sizeof state);
-    rec->state = ljgap_job_state_parse(state);
+    rec->state = ljgap__job_state_parse(state);
     rec->progress = number(val[LJGAP_PG_PROGRESS], len[LJGAP_PG_PROGRESS]);
     rec->created = number(val[LJGAP_PG_CREATED], len[LJGAP_PG_CREATED]);
     rec->started = number(val[LJGAP_PG_STARTED], len[LJGAP_PG_STARTED]);
@@ -219,18 +219,18 @@ int ljgap_jobstore_pg_row(ljgap_job_record *rec, const char *const *val, const i
     }
     return LJGAP_JOBSTORE_OK;
 nomem:
-    ljgap_job_record_clear(rec);
-    ljgap_jobstore_set_errmsg("out of memory reading a job");
+    ljgap__job_record_clear(rec);
+    ljgap__jobstore_set_errmsg("out of memory reading a job");
     return LJGAP_JOBSTORE_NOMEM;
 }
 
 /* Row 0 of res into rec (ncols: LJGAP_PG_REQUEST, or LJGAP_PG_COLS with the request). */
-static int read_row(PGresult *res, ljgap_job_record *rec, int ncols)
+static int read_row(PGresult *res, ljgap__job_record *rec, int ncols)
 {
     const char *val[LJGAP_PG_COLS] = {0};
     int len[LJGAP_PG_COLS] = {0};
     if (PQnfields(res) != ncols) {
-        ljgap_jobstore_set_errmsg("the server answered %d columns, not %d", PQnfields(res), ncols);
+        ljgap__jobstore_set_errmsg("the server answered %d columns, not %d", PQnfields(res), ncols);
         return LJGAP_JOBSTORE_ERROR;
     }
     for (int i = 0; i < ncols; i++)
@@ -238,12 +238,12 @@ static int read_row(PGresult *res, ljgap_job_record *rec, int ncols)
             val[i] = PQgetvalue(res, 0, i);
             len[i] = PQgetlength(res, 0, i);
         }
-    return ljgap_jobstore_pg_row(rec, val, len, ncols);
+    return ljgap__jobstore_pg_row(rec, val, len, ncols);
 }
 
 /* ---- the operations ---- */
 
-static int op_create(ljgap_jobstore *base, const char *id, const char *kind, const char *request,
+static int op_create(ljgap__jobstore *base, const char *id, const char *kind, const char *request,
                      size_t len, unsigned max_queued)
 {
     pg_store *s = (pg_store *)base;
@@ -261,7 +261,7 @@ static int op_create(ljgap_jobstore *base, const char *id, const char *kind, con
     return st;
 }
 
-static int op_claim(ljgap_jobstore *base, const char *owner, double lease_s, ljgap_job_record *rec)
+static int op_claim(ljgap__jobstore *base, const char *owner, double lease_s, ljgap__job_record *rec)
 {
     pg_store *s = (pg_store *)base;
     char lease[32];
@@ -276,7 +276,7 @@ static int op_claim(ljgap_jobstore *base, const char *owner, double lease_s, ljg
     return st;
 }
 
-static int op_renew(ljgap_jobstore *base, const char *id, long run_, double progress,
+static int op_renew(ljgap__jobstore *base, const char *id, long run_, double progress,
                     double lease_s, int *cancel)
 {
     pg_store *s = (pg_store *)base;
@@ -296,12 +296,12 @@ static int op_renew(ljgap_jobstore *base, const char *id, long run_, double prog
     return st;
 }
 
-static int op_finish(ljgap_jobstore *base, const char *id, long run_, ljgap_job_state state,
+static int op_finish(ljgap__jobstore *base, const char *id, long run_, ljgap__job_state state,
                      const char *answer, size_t answer_len)
 {
     pg_store *s = (pg_store *)base;
     char r[24];
-    const char *v[4] = {id, r, ljgap_job_state_name(state), answer};
+    const char *v[4] = {id, r, ljgap__job_state_name(state), answer};
     PGresult *res;
     int st;
     (void)answer_len; /* answer is NUL-terminated text */
@@ -314,7 +314,7 @@ static int op_finish(ljgap_jobstore *base, const char *id, long run_, ljgap_job_
     return st;
 }
 
-static int op_release(ljgap_jobstore *base, const char *id, long run_)
+static int op_release(ljgap__jobstore *base, const char *id, long run_)
 {
     pg_store *s = (pg_store *)base;
     char r[24];
@@ -332,7 +332,7 @@ static int op_release(ljgap_jobstore *base, const char *id, long run_)
 /* Runs sql with the id as its parameter and reads the one record it returns into rec;
  * LJGAP_JOBSTORE_UNKNOWN when it returns none. */
 static int record_by_id(pg_store *s, const char *what, const char *sql, const char *id,
-                        ljgap_job_record *rec)
+                        ljgap__job_record *rec)
 {
     const char *v[1] = {id};
     PGresult *res;
@@ -344,19 +344,19 @@ static int record_by_id(pg_store *s, const char *what, const char *sql, const ch
     return st;
 }
 
-static int op_get(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+static int op_get(ljgap__jobstore *base, const char *id, ljgap__job_record *rec)
 {
     return record_by_id((pg_store *)base, "cannot read a job", sql_get, id, rec);
 }
 
-static int op_cancel(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+static int op_cancel(ljgap__jobstore *base, const char *id, ljgap__job_record *rec)
 {
     int st = record_by_id((pg_store *)base, "cannot cancel a job", sql_cancel, id, rec);
     /* not queued or running: finished (left as it is), unknown, or a damaged row */
     return st == LJGAP_JOBSTORE_UNKNOWN ? op_get(base, id, rec) : st;
 }
 
-static int op_counts(ljgap_jobstore *base, unsigned *queued, unsigned *running)
+static int op_counts(ljgap__jobstore *base, unsigned *queued, unsigned *running)
 {
     pg_store *s = (pg_store *)base;
     PGresult *res;
@@ -371,7 +371,7 @@ static int op_counts(ljgap_jobstore *base, unsigned *queued, unsigned *running)
     return LJGAP_JOBSTORE_OK;
 }
 
-static int op_evict(ljgap_jobstore *base, unsigned keep_done, double keep_seconds,
+static int op_evict(ljgap__jobstore *base, unsigned keep_done, double keep_seconds,
                     unsigned *evicted)
 {
     pg_store *s = (pg_store *)base;
@@ -389,7 +389,7 @@ static int op_evict(ljgap_jobstore *base, unsigned keep_done, double keep_second
     return LJGAP_JOBSTORE_OK;
 }
 
-static void op_close(ljgap_jobstore *base)
+static void op_close(ljgap__jobstore *base)
 {
     pg_store *s = (pg_store *)base;
     for (unsigned i = 0; i < s->n_idle; i++)
@@ -404,7 +404,7 @@ static void op_close(ljgap_jobstore *base)
     free(s);
 }
 
-static const ljgap_jobstore_ops pg_ops = {
+static const ljgap__jobstore_ops pg_ops = {
     .name = "postgresql",
     .create = op_create,
     .claim = op_claim,
@@ -442,7 +442,7 @@ static PGresult *open_exec(pg_store *s, PGconn *c, const char *sql, ExecStatusTy
 /* The schema: ours, at its latest version (migrating under the lock), or an error in err. */
 static int check_schema(pg_store *s, PGconn *c, char *err, size_t errlen)
 {
-    double deadline = ljgap_clock_now() + 4 * OP_S;
+    double deadline = ljgap__clock_now() + 4 * OP_S;
     PGresult *res = NULL;
     long version = 0, tables = 0;
     int has_schema, has_version, ok = -1;
@@ -509,12 +509,12 @@ end:
     PQclear(res);
     if (ok != 0 && PQstatus(c) == CONNECTION_OK) { /* leave the connection clean (or drop it) */
         exec_fail fail;
-        PQclear(pgs_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, ljgap_clock_now() + OP_S, &fail));
+        PQclear(pgs_exec(c, "ROLLBACK", -1, NULL, NULL, NULL, ljgap__clock_now() + OP_S, &fail));
     }
     return ok;
 }
 
-int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore **out, char *err,
+int ljgap__jobstore_open_pg(const char *url, unsigned max_conns, ljgap__jobstore **out, char *err,
                            size_t errlen)
 {
     pg_store *s = NULL;
@@ -537,7 +537,7 @@ int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore *
     }
     s->base.ops = &pg_ops;
     pthread_mutex_init(&s->lock, NULL);
-    ljgap_cond_init_monotonic(&s->freed);
+    ljgap__cond_init_monotonic(&s->freed);
     s->max = max_conns ? max_conns : CONNS_DEFAULT;
     pgs_find_secrets(s, url);
     s->safe = strdup("postgresql://");
@@ -585,7 +585,7 @@ int ljgap_jobstore_open_pg(const char *url, unsigned max_conns, ljgap_jobstore *
     s->keys[k] = "client_encoding", s->vals[k++] = "UTF8"; /* after the URL: always */
     s->keys[k] = NULL, s->vals[k] = NULL;
 
-    if (!(c = pgs_connect(s, ljgap_clock_now() + OP_S, why, sizeof why))) {
+    if (!(c = pgs_connect(s, ljgap__clock_now() + OP_S, why, sizeof why))) {
         char clean[MSG_MAX];
         pgs_clean_msg(s, why, clean, sizeof clean);
         snprintf(err, errlen, "cannot connect to the job database %s: %s", s->safe, clean);

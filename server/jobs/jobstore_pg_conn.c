@@ -18,7 +18,7 @@
 #include <time.h>
 
 /* Session settings of every connection: the server gives up when we do; bytea in hex and
- * floats in full precision, which is what ljgap_jobstore_pg_row reads. */
+ * floats in full precision, which is what ljgap__jobstore_pg_row reads. */
 static const char sql_session[] =
     "SET statement_timeout = 5000; SET lock_timeout = 4000; SET bytea_output = 'hex'; "
     "SET extra_float_digits = 3";
@@ -60,7 +60,7 @@ static void set_error(const pg_store *s, const char *what, const char *why)
 {
     char clean[MSG_MAX];
     pgs_clean_msg(s, why, clean, sizeof clean);
-    ljgap_jobstore_set_errmsg("%s: %s: %s", s->safe, what, clean);
+    ljgap__jobstore_set_errmsg("%s: %s: %s", s->safe, what, clean);
 }
 
 int pgs_hexval(char c)
@@ -131,14 +131,14 @@ static void quiet(void *arg, const char *message)
     (void)arg, (void)message; /* notices (and a FATAL before a close) are no log lines of ours */
 }
 
-/* Waits until fd is ready for events or deadline (ljgap_clock_now) passes: 1 ready, 0 timed out, -1
+/* Waits until fd is ready for events or deadline (ljgap__clock_now) passes: 1 ready, 0 timed out, -1
  * a bad descriptor. */
 static int wait_socket(int fd, short events, double deadline)
 {
     struct pollfd p = {fd, events, 0};
     if (fd < 0) return -1;
     for (;;) {
-        double left = deadline - ljgap_clock_now();
+        double left = deadline - ljgap__clock_now();
         int rc;
         if (left <= 0) return 0;
         rc = poll(&p, 1, (int)ceil(left * 1e3));
@@ -259,7 +259,7 @@ fail:
 static void mark_down(pg_store *s, const char *why)
 {
     s->down = 1;
-    s->retry_at = ljgap_clock_now() + RETRY_S;
+    s->retry_at = ljgap__clock_now() + RETRY_S;
     pgs_clean_msg(s, why, s->reason, sizeof s->reason);
     pthread_cond_broadcast(&s->freed);
 }
@@ -295,10 +295,10 @@ static int take(pg_store *s, double deadline, PGconn **out)
             pthread_mutex_lock(&s->lock);
             continue;
         }
-        if (s->down && (s->probing || ljgap_clock_now() < s->retry_at)) {
+        if (s->down && (s->probing || ljgap__clock_now() < s->retry_at)) {
             snprintf(why, sizeof why, "%s", s->reason);
             pthread_mutex_unlock(&s->lock);
-            ljgap_jobstore_set_errmsg("%s: the database is unreachable (%s); trying again every "
+            ljgap__jobstore_set_errmsg("%s: the database is unreachable (%s); trying again every "
                                       "%.0f s",
                                       s->safe, why, RETRY_S);
             return LJGAP_JOBSTORE_ERROR;
@@ -326,14 +326,14 @@ static int take(pg_store *s, double deadline, PGconn **out)
         }
         { /* every connection is in use: wait for one, or for the store to go down */
             struct timespec t;
-            double left = deadline - ljgap_clock_now();
+            double left = deadline - ljgap__clock_now();
             if (left <= 0) {
                 pthread_mutex_unlock(&s->lock);
-                ljgap_jobstore_set_errmsg("%s: all %u connections stayed busy for %.0f s", s->safe,
+                ljgap__jobstore_set_errmsg("%s: all %u connections stayed busy for %.0f s", s->safe,
                                           s->max, OP_S);
                 return LJGAP_JOBSTORE_ERROR;
             }
-            t = ljgap_deadline_in(left);
+            t = ljgap__deadline_in(left);
             pthread_cond_timedwait(&s->freed, &s->lock, &t);
         }
     }
@@ -367,7 +367,7 @@ void pgs_give(pg_store *s, PGconn *c, exec_fail fail)
 PGresult *pgs_run(pg_store *s, const char *what, const char *sql, int n, const char *const *vals,
                   const char *request, size_t request_len, ExecStatusType want, int retry, int *st)
 {
-    double deadline = ljgap_clock_now() + OP_S;
+    double deadline = ljgap__clock_now() + OP_S;
     const char *v[8];
     int lens[8] = {0}, fmts[8] = {0};
     PGresult *res;
@@ -393,7 +393,7 @@ PGresult *pgs_run(pg_store *s, const char *what, const char *sql, int n, const c
             else
                 snprintf(why, sizeof why, "%s", PQerrorMessage(c));
             pgs_give(s, c, fail);
-            if (fail == X_BROKEN && retry-- > 0 && ljgap_clock_now() < deadline) continue;
+            if (fail == X_BROKEN && retry-- > 0 && ljgap__clock_now() < deadline) continue;
             set_error(s, what, why);
             *st = LJGAP_JOBSTORE_ERROR;
             return NULL;

@@ -15,7 +15,7 @@
 #define MSG_MAX 400
 
 typedef struct {
-    ljgap_jobstore base;   /* the operations; first, so a ljgap_jobstore * points here */
+    ljgap__jobstore base;   /* the operations; first, so a ljgap__jobstore * points here */
     pthread_mutex_t lock;  /* guards the pool and the down state below */
     pthread_cond_t freed;  /* a connection was given back, or the store went down */
     PGconn **idle;         /* connections not in use (max of them at most) */

@@ -129,7 +129,7 @@ static const char *const sql[S_N] = {
 };
 
 typedef struct {
-    ljgap_jobstore base;     /* the operations; first, so a ljgap_jobstore * points here */
+    ljgap__jobstore base;     /* the operations; first, so a ljgap__jobstore * points here */
     pthread_mutex_t lock;    /* serialises every use of db and of the statements */
     sqlite3 *db;             /* the one connection */
     sqlite3_stmt *stmt[S_N]; /* prepared once at open */
@@ -145,7 +145,7 @@ typedef struct {
 static int db_error(sqlite_store *s, const char *what)
 {
     int code = sqlite3_errcode(s->db);
-    ljgap_jobstore_set_errmsg("%s: %s: %s", s->path, what, sqlite3_errmsg(s->db));
+    ljgap__jobstore_set_errmsg("%s: %s: %s", s->path, what, sqlite3_errmsg(s->db));
     return code == SQLITE_NOMEM ? LJGAP_JOBSTORE_NOMEM : LJGAP_JOBSTORE_ERROR;
 }
 
@@ -200,13 +200,13 @@ static void column_short(sqlite3_stmt *q, int col, char *dst, size_t cap)
 }
 
 /* The row at q (RECORD_COLS, then request when with_request) into rec. */
-static int read_record(sqlite_store *s, sqlite3_stmt *q, ljgap_job_record *rec, int with_request)
+static int read_record(sqlite_store *s, sqlite3_stmt *q, ljgap__job_record *rec, int with_request)
 {
     char state[16];
     column_short(q, 0, rec->id, sizeof rec->id);
     column_short(q, 1, rec->kind, sizeof rec->kind);
     column_short(q, 2, state, sizeof state);
-    rec->state = ljgap_job_state_parse(state);
+    rec->state = ljgap__job_state_parse(state);
     rec->progress = sqlite3_column_double(q, 3);
     rec->created = sqlite3_column_double(q, 4);
     rec->started = sqlite3_column_double(q, 5);
@@ -216,12 +216,12 @@ static int read_record(sqlite_store *s, sqlite3_stmt *q, ljgap_job_record *rec, 
     rec->lost = (long)sqlite3_column_int64(q, 9);
     if (column_copy(q, 10, &rec->answer, &rec->answer_len) != 0 ||
         (with_request && column_copy(q, 11, &rec->request, &rec->request_len) != 0)) {
-        ljgap_job_record_clear(rec);
-        ljgap_jobstore_set_errmsg("%s: out of memory reading a job", s->path);
+        ljgap__job_record_clear(rec);
+        ljgap__jobstore_set_errmsg("%s: out of memory reading a job", s->path);
         return LJGAP_JOBSTORE_NOMEM;
     }
     if (with_request && !rec->request && !(rec->request = calloc(1, 1))) {
-        ljgap_job_record_clear(rec);
+        ljgap__job_record_clear(rec);
         return LJGAP_JOBSTORE_NOMEM;
     }
     return LJGAP_JOBSTORE_OK;
@@ -231,7 +231,7 @@ static int read_record(sqlite_store *s, sqlite3_stmt *q, ljgap_job_record *rec, 
 
 /* Steps q to its end. With rec, the first row (if any) is read into it and *got set; the
  * other columns' values are dropped. Resets q either way. */
-static int run_stmt(sqlite_store *s, int which, ljgap_job_record *rec, int with_request, int *got)
+static int run_stmt(sqlite_store *s, int which, ljgap__job_record *rec, int with_request, int *got)
 {
     sqlite3_stmt *q = s->stmt[which];
     int rc, st = LJGAP_JOBSTORE_OK;
@@ -242,7 +242,7 @@ static int run_stmt(sqlite_store *s, int which, ljgap_job_record *rec, int with_
             *got = st == LJGAP_JOBSTORE_OK;
         }
     if (rc != SQLITE_DONE) {
-        if (rec) ljgap_job_record_clear(rec);
+        if (rec) ljgap__job_record_clear(rec);
         st = db_error(s, "statement failed");
         if (got) *got = 0;
     }
@@ -258,7 +258,7 @@ static int bind_text(sqlite3_stmt *q, int i, const char *t)
 
 /* ---- the operations ---- */
 
-static int op_create(ljgap_jobstore *base, const char *id, const char *kind, const char *request,
+static int op_create(ljgap__jobstore *base, const char *id, const char *kind, const char *request,
                      size_t len, unsigned max_queued)
 {
     sqlite_store *s = (sqlite_store *)base;
@@ -271,7 +271,7 @@ static int op_create(ljgap_jobstore *base, const char *id, const char *kind, con
     bind_text(q, 1, id);
     bind_text(q, 2, kind);
     sqlite3_bind_blob(q, 3, request, (int)len, SQLITE_STATIC);
-    sqlite3_bind_double(q, 4, ljgap_jobstore_wallclock());
+    sqlite3_bind_double(q, 4, ljgap__jobstore_wallclock());
     sqlite3_bind_int64(q, 5, max_queued);
     rc = sqlite3_step(q);
     if (rc == SQLITE_DONE)
@@ -286,10 +286,10 @@ static int op_create(ljgap_jobstore *base, const char *id, const char *kind, con
     return st;
 }
 
-static int op_claim(ljgap_jobstore *base, const char *owner, double lease_s, ljgap_job_record *rec)
+static int op_claim(ljgap__jobstore *base, const char *owner, double lease_s, ljgap__job_record *rec)
 {
     sqlite_store *s = (sqlite_store *)base;
-    double now = ljgap_jobstore_wallclock();
+    double now = ljgap__jobstore_wallclock();
     int st, got = 0;
     pthread_mutex_lock(&s->lock);
     durability(s, 0);
@@ -302,7 +302,7 @@ static int op_claim(ljgap_jobstore *base, const char *owner, double lease_s, ljg
     return st == LJGAP_JOBSTORE_OK && !got ? LJGAP_JOBSTORE_EMPTY : st;
 }
 
-static int op_renew(ljgap_jobstore *base, const char *id, long run, double progress, double lease_s,
+static int op_renew(ljgap__jobstore *base, const char *id, long run, double progress, double lease_s,
                     int *cancel)
 {
     sqlite_store *s = (sqlite_store *)base;
@@ -314,7 +314,7 @@ static int op_renew(ljgap_jobstore *base, const char *id, long run, double progr
     bind_text(q, 1, id);
     sqlite3_bind_int64(q, 2, run);
     sqlite3_bind_double(q, 3, progress);
-    sqlite3_bind_double(q, 4, ljgap_jobstore_wallclock());
+    sqlite3_bind_double(q, 4, ljgap__jobstore_wallclock());
     sqlite3_bind_double(q, 5, lease_s);
     while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
         *cancel = sqlite3_column_int64(q, 0) != 0;
@@ -327,7 +327,7 @@ static int op_renew(ljgap_jobstore *base, const char *id, long run, double progr
     return st;
 }
 
-static int op_finish(ljgap_jobstore *base, const char *id, long run, ljgap_job_state state,
+static int op_finish(ljgap__jobstore *base, const char *id, long run, ljgap__job_state state,
                      const char *answer, size_t answer_len)
 {
     sqlite_store *s = (sqlite_store *)base;
@@ -339,19 +339,19 @@ static int op_finish(ljgap_jobstore *base, const char *id, long run, ljgap_job_s
     q = s->stmt[S_FINISH];
     bind_text(q, 1, id);
     sqlite3_bind_int64(q, 2, run);
-    bind_text(q, 3, ljgap_job_state_name(state));
+    bind_text(q, 3, ljgap__job_state_name(state));
     if (answer)
         sqlite3_bind_text(q, 4, answer, (int)answer_len, SQLITE_STATIC);
     else
         sqlite3_bind_null(q, 4);
-    sqlite3_bind_double(q, 5, ljgap_jobstore_wallclock());
+    sqlite3_bind_double(q, 5, ljgap__jobstore_wallclock());
     st = run_stmt(s, S_FINISH, NULL, 0, NULL);
     if (st == LJGAP_JOBSTORE_OK && sqlite3_changes(s->db) != 1) st = LJGAP_JOBSTORE_LOST;
     pthread_mutex_unlock(&s->lock);
     return st;
 }
 
-static int op_release(ljgap_jobstore *base, const char *id, long run)
+static int op_release(ljgap__jobstore *base, const char *id, long run)
 {
     sqlite_store *s = (sqlite_store *)base;
     int st;
@@ -366,16 +366,16 @@ static int op_release(ljgap_jobstore *base, const char *id, long run)
 }
 
 /* get, lock held */
-static int get_locked(sqlite_store *s, const char *id, ljgap_job_record *rec)
+static int get_locked(sqlite_store *s, const char *id, ljgap__job_record *rec)
 {
     int st, got = 0;
     bind_text(s->stmt[S_GET], 1, id);
     st = run_stmt(s, S_GET, rec, 0, &got);
-    rec->now = ljgap_jobstore_wallclock();
+    rec->now = ljgap__jobstore_wallclock();
     return st == LJGAP_JOBSTORE_OK && !got ? LJGAP_JOBSTORE_UNKNOWN : st;
 }
 
-static int op_get(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+static int op_get(ljgap__jobstore *base, const char *id, ljgap__job_record *rec)
 {
     sqlite_store *s = (sqlite_store *)base;
     int st;
@@ -385,10 +385,10 @@ static int op_get(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
     return st;
 }
 
-static int op_cancel(ljgap_jobstore *base, const char *id, ljgap_job_record *rec)
+static int op_cancel(ljgap__jobstore *base, const char *id, ljgap__job_record *rec)
 {
     sqlite_store *s = (sqlite_store *)base;
-    double now = ljgap_jobstore_wallclock();
+    double now = ljgap__jobstore_wallclock();
     int st, got = 0;
     pthread_mutex_lock(&s->lock);
     durability(s, 1);
@@ -402,7 +402,7 @@ static int op_cancel(ljgap_jobstore *base, const char *id, ljgap_job_record *rec
     return st;
 }
 
-static int op_counts(ljgap_jobstore *base, unsigned *queued, unsigned *running)
+static int op_counts(ljgap__jobstore *base, unsigned *queued, unsigned *running)
 {
     sqlite_store *s = (sqlite_store *)base;
     sqlite3_stmt *q;
@@ -419,14 +419,14 @@ static int op_counts(ljgap_jobstore *base, unsigned *queued, unsigned *running)
     return st;
 }
 
-static int op_evict(ljgap_jobstore *base, unsigned keep_done, double keep_seconds,
+static int op_evict(ljgap__jobstore *base, unsigned keep_done, double keep_seconds,
                     unsigned *evicted)
 {
     sqlite_store *s = (sqlite_store *)base;
     int st;
     pthread_mutex_lock(&s->lock);
     durability(s, 0);
-    sqlite3_bind_double(s->stmt[S_EVICT], 1, ljgap_jobstore_wallclock() - keep_seconds);
+    sqlite3_bind_double(s->stmt[S_EVICT], 1, ljgap__jobstore_wallclock() - keep_seconds);
     sqlite3_bind_int64(s->stmt[S_EVICT], 2, keep_done);
     st = run_stmt(s, S_EVICT, NULL, 0, NULL);
     if (st == LJGAP_JOBSTORE_OK) *evicted = (unsigned)sqlite3_changes(s->db);
@@ -434,7 +434,7 @@ static int op_evict(ljgap_jobstore *base, unsigned keep_done, double keep_second
     return st;
 }
 
-static void op_close(ljgap_jobstore *base)
+static void op_close(ljgap__jobstore *base)
 {
     sqlite_store *s = (sqlite_store *)base;
     for (int i = 0; i < S_N; i++)
@@ -446,7 +446,7 @@ static void op_close(ljgap_jobstore *base)
     free(s);
 }
 
-static const ljgap_jobstore_ops sqlite_ops = {
+static const ljgap__jobstore_ops sqlite_ops = {
     .name = "sqlite",
     .create = op_create,
     .claim = op_claim,
@@ -615,7 +615,7 @@ static int requeue(sqlite_store *s, char *err, size_t errlen)
         "lost = lost + 1, lease_until = NULL, owner = NULL WHERE state = 'running'",
         -1, &q, NULL);
     if (rc == SQLITE_OK) {
-        sqlite3_bind_double(q, 1, ljgap_jobstore_wallclock());
+        sqlite3_bind_double(q, 1, ljgap__jobstore_wallclock());
         rc = sqlite3_step(q);
     }
     sqlite3_finalize(q);
@@ -624,7 +624,7 @@ static int requeue(sqlite_store *s, char *err, size_t errlen)
     return -1;
 }
 
-int ljgap_jobstore_open_sqlite(const char *dir, ljgap_jobstore **out, char *err, size_t errlen)
+int ljgap__jobstore_open_sqlite(const char *dir, ljgap__jobstore **out, char *err, size_t errlen)
 {
     sqlite_store *s = NULL;
     struct stat sb;

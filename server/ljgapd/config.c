@@ -136,7 +136,7 @@ static void defaults(ljgapd_config *c)
     c->max_memory = budget_default_limit();
     c->grace_s = 7.0;
     c->stop_s = 9.5;
-    ljgap_jobs_config_default(&c->jobs);
+    ljgap__jobs_config_default(&c->jobs);
     c->job_seconds = 600;
     c->job_threads = 1;
     c->job_retry = 10;

@@ -35,7 +35,7 @@ struct conn_rec {
     conn_rec *prev, *next;
     int fd;       /* the socket (libmicrohttpd's) */
     int state;    /* C_IDLE, C_RECEIVING or C_BUSY */
-    double since; /* ljgap_clock_now() when it last became idle (or opened) */
+    double since; /* ljgap__clock_now() when it last became idle (or opened) */
     int cut;      /* the sweeper shut it down already */
 };
 
@@ -63,14 +63,14 @@ static void *sweep_main(void *arg)
     pthread_mutex_lock(&cs->lock);
     while (!cs->quit) {
         struct timespec until;
-        double now = ljgap_clock_now();
+        double now = ljgap__clock_now();
         for (conn_rec *r = cs->head; r; r = r->next) {
             if (r->state == C_BUSY || r->cut || now - r->since <= cs->receive_s) continue;
             shutdown(r->fd, SHUT_RDWR);
             r->cut = 1;
             cs->stats.cut++;
         }
-        until = ljgap_deadline_in(SWEEP_MS / 1000.0);
+        until = ljgap__deadline_in(SWEEP_MS / 1000.0);
         pthread_cond_timedwait(&cs->quit_cv, &cs->lock, &until);
     }
     pthread_mutex_unlock(&cs->lock);
@@ -83,7 +83,7 @@ conns *conns_start(double receive_s)
     if (!(receive_s > 0) || !(cs = calloc(1, sizeof *cs))) return NULL;
     cs->receive_s = receive_s;
     pthread_mutex_init(&cs->lock, NULL);
-    ljgap_cond_init_monotonic(&cs->quit_cv);
+    ljgap__cond_init_monotonic(&cs->quit_cv);
     if (pthread_create(&cs->sweeper, NULL, sweep_main, cs) != 0) {
         conns_free(cs);
         return NULL;
@@ -106,7 +106,7 @@ conn_rec *conns_open(conns *cs, int fd)
     if (!r) return NULL;
     r->fd = fd;
     r->state = C_IDLE;
-    r->since = ljgap_clock_now();
+    r->since = ljgap__clock_now();
     pthread_mutex_lock(&cs->lock);
     r->next = cs->head;
     if (cs->head) cs->head->prev = r;
@@ -134,7 +134,7 @@ static void set_state(conns *cs, conn_rec *r, int state)
 {
     if (!r) return;
     pthread_mutex_lock(&cs->lock);
-    if (state == C_IDLE) r->since = ljgap_clock_now();
+    if (state == C_IDLE) r->since = ljgap__clock_now();
     r->state = state;
     pthread_mutex_unlock(&cs->lock);
 }

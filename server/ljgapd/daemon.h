@@ -22,7 +22,7 @@
 #define LJGAPD_DAEMON_H
 
 #include "budget.h"
-#include "clock.h" /* ljgap_clock_since */
+#include "clock.h" /* ljgap__clock_since */
 #include "conns.h"
 #include "handler.h"
 #include "http_cache.h"
@@ -61,7 +61,7 @@ typedef struct {
                                   * of 2 GiB and a quarter of physical memory) */
     double grace_s;              /* shutdown: seconds in-flight work may run (7) */
     double stop_s;               /* shutdown: seconds after the signal at which we stop (9.5) */
-    ljgap_jobs_config jobs;      /* simulation jobs: workers, queue, finished jobs kept */
+    ljgap__jobs_config jobs;      /* simulation jobs: workers, queue, finished jobs kept */
     unsigned job_seconds;        /* wall-time cap of one simulation (600) */
     unsigned job_threads;        /* threads of one simulation's realizations (1) */
     unsigned job_retry;          /* Retry-After seconds when the job queue is full (10) */
@@ -78,8 +78,8 @@ int ljgapd_parse_args(ljgapd_config *c, int argc, char **argv);
 typedef struct {
     ljgapd_config cfg;
     http_cache *cache;       /* answers of earlier identical requests */
-    ljgap_jobstore *store;   /* where the jobs are kept (jobstore.h) */
-    ljgap_jobs *jobs;        /* simulation jobs */
+    ljgap__jobstore *store;   /* where the jobs are kept (jobstore.h) */
+    ljgap__jobs *jobs;        /* simulation jobs */
     pool *slots;             /* compute slots and their wait queue */
     pool *ops;               /* threads for job-store calls (they may wait on the store) */
     conns *conns;            /* connection records */
@@ -123,13 +123,13 @@ typedef struct {
     size_t limit;                 /* the body's limit: cfg.max_body, or the route's text_max */
     int text;                     /* the body is text/plain or text/csv (a text route) */
     int file;                     /* the body is an instrument file (a text route; files.h) */
-    ljgap_param *params;          /* a text or file body's query parameters (owned, decoded) */
+    ljgap__param *params;          /* a text or file body's query parameters (owned, decoded) */
     size_t nparams;               /* entries in params */
     int too_large;                /* the body outgrew its limit: answer 413 */
     int no_memory;                /* the body outgrew the memory budget: answer 503 */
     int close;                    /* close the connection after the answer (body left unread) */
     size_t held;                  /* bytes of the body reserved in ljgapd_srv.bodies */
-    ljgap_token_count tokens;     /* a text body's values so far (memest.h) */
+    ljgap__token_count tokens;     /* a text body's values so far (memest.h) */
     size_t mem;                   /* its computation's estimate, reserved when it gets a slot */
     size_t discarded;             /* body bytes dropped since (or after an early answer) */
     work_task *task;              /* its work while it waits, runs, or has just ended */
@@ -164,8 +164,8 @@ struct route {
                                       * (0: JSON only) */
 };
 
-/* The kinds of job the daemon runs (one: "simulation"), for ljgap_jobs_alloc. */
-extern const ljgap_job_kind ljgapd_job_kinds[];
+/* The kinds of job the daemon runs (one: "simulation"), for ljgap__jobs_alloc. */
+extern const ljgap__job_kind ljgapd_job_kinds[];
 extern const size_t ljgapd_job_nkinds;
 
 /* The row for url: first match wins; the last row (path NULL) answers 404. */
@@ -175,7 +175,7 @@ const struct route *ljgapd_route_find(const char *url);
 
 /* What a work function produces: an answer body, or a problem for the I/O thread to write. */
 typedef struct {
-    ljgap_reply rep;    /* the answer (status, body, content type), when problem is 0 */
+    ljgap__reply rep;    /* the answer (status, body, content type), when problem is 0 */
     int problem;        /* nonzero: answer a problem with this status and detail instead */
     char detail[256];   /* the problem's detail */
     const char *header; /* one extra header of either answer (Location, Retry-After), or NULL */
@@ -198,7 +198,7 @@ void ljgapd_work_release(request *r);
 enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r);
 int ljgapd_compute_exists(const char *rest);
 /* POST /v1/psd: JSON as ljgapd_route_compute; a text body (a height matrix) or an instrument
- * file (ljgap_handle_file) with its query on a
+ * file (ljgap__handle_file) with its query on a
  * compute slot, not cached. */
 enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r);
 
@@ -215,8 +215,8 @@ enum MHD_Result ljgapd_respond_json_hdr(struct MHD_Connection *c, request *r, in
                                         const char *header, const char *value);
 enum MHD_Result ljgapd_respond_json(struct MHD_Connection *c, request *r, int status,
                                     const char *ctype, const char *body, size_t len);
-/* Answers a ljgap_reply and frees it. */
-enum MHD_Result ljgapd_respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep);
+/* Answers a ljgap__reply and frees it. */
+enum MHD_Result ljgapd_respond_reply(struct MHD_Connection *c, request *r, ljgap__reply *rep);
 /* An RFC 9457 problem; header/value, if not NULL, is one extra header (Allow, Retry-After). */
 enum MHD_Result ljgapd_respond_problem(struct MHD_Connection *c, request *r, int status,
                                        const char *detail, const char *header, const char *value);

@@ -7,7 +7,7 @@
 
 #define TOKEN_MAX 64 /* longer than any numeric address (an IPv6 one is at most 45) */
 
-int ljgap_forwarded_client(const char *xff, char *out, size_t n)
+int ljgapd_forwarded_client(const char *xff, char *out, size_t n)
 {
     const char *last = strrchr(xff, ',');
     char tok[TOKEN_MAX];

@@ -13,6 +13,6 @@
 
 /* Writes the last entry of the header value xff into out (size n) and returns 1 when it is an
  * IP address that fits; returns 0 (out is "") otherwise. */
-int ljgap_forwarded_client(const char *xff, char *out, size_t n);
+int ljgapd_forwarded_client(const char *xff, char *out, size_t n);
 
 #endif

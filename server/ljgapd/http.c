@@ -79,7 +79,7 @@ static int is_file_type(const char *ct)
     ct += strspn(ct, " \t");
     n = strcspn(ct, "; \t");
     if (n == 24 && strncasecmp(ct, "application/octet-stream", 24) == 0) return 1;
-    for (const ljgap_files_format *const *f = ljgap_files_formats(); *f; f++)
+    for (const ljgap__files_format *const *f = ljgap__files_formats(); *f; f++)
         if ((*f)->media_type && strlen((*f)->media_type) == n &&
             strncasecmp(ct, (*f)->media_type, n) == 0)
             return 1;
@@ -94,7 +94,7 @@ static void text_types_fill(void)
 {
     size_t k = (size_t)snprintf(text_types, sizeof text_types,
                                 "application/json, text/plain, text/csv, application/octet-stream");
-    for (const ljgap_files_format *const *f = ljgap_files_formats(); *f; f++)
+    for (const ljgap__files_format *const *f = ljgap__files_formats(); *f; f++)
         if ((*f)->media_type && k + strlen((*f)->media_type) + 3 < sizeof text_types)
             k += (size_t)snprintf(text_types + k, sizeof text_types - k, ", %s", (*f)->media_type);
 }
@@ -142,7 +142,7 @@ static void client_of(struct MHD_Connection *c, char *out, size_t n)
         MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
     if (ljgapd_srv.cfg.trust_proxy) {
         const char *xff = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Forwarded-For");
-        if (xff && ljgap_forwarded_client(xff, out, n)) return;
+        if (xff && ljgapd_forwarded_client(xff, out, n)) return;
     }
     address_of(ci ? ci->client_addr : NULL, out, n);
 }
@@ -191,7 +191,7 @@ static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char 
         q->bytes += strlen(kv[0]) + 1 + (value ? strlen(value) + 1 : 0);
         return MHD_YES;
     }
-    ljgap_param *p = &q->r->params[q->r->nparams++];
+    ljgap__param *p = &q->r->params[q->r->nparams++];
     for (int i = 0; i < 2; i++) {
         if (!kv[i]) continue;
         size_t n = strlen(kv[i]) + 1;
@@ -325,7 +325,7 @@ static int request_take(request *r, const char *data, size_t n)
         r->discarded += n;
         return r->discarded > DISCARD_FACTOR * limit ? -1 : 0;
     }
-    if (r->text) ljgap_token_feed(&r->tokens, data, n);
+    if (r->text) ljgap__token_feed(&r->tokens, data, n);
     memcpy(r->body + r->len, data, n);
     r->len += n;
     r->body[r->len] = '\0';
@@ -370,7 +370,7 @@ void ljgapd_on_completed(void *cls, struct MHD_Connection *c, void **con_cls,
     if (!r) return;
     /* behind a proxy the remote address is the proxy's: name the client it forwarded */
     fprintf(stderr, "%s %s %d %.1fms id=%s%s%s%s%s\n", r->method, r->path, r->status,
-            1e3 * ljgap_clock_since(&r->t0), r->id, ljgapd_srv.cfg.trust_proxy ? " client=" : "",
+            1e3 * ljgap__clock_since(&r->t0), r->id, ljgapd_srv.cfg.trust_proxy ? " client=" : "",
             ljgapd_srv.cfg.trust_proxy ? r->client : "", r->note,
             toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "" : " (connection closed early)");
     conns_idle(ljgapd_srv.conns, r->rec);
@@ -412,7 +412,7 @@ void ljgapd_mhd_log(void *cls, const char *fmt, va_list ap)
     while (n > 0 && (msg[n - 1] == '\n' || msg[n - 1] == '\r'))
         msg[--n] = '\0';
     pthread_mutex_lock(&lock);
-    if (strcmp(msg, last) == 0 && ljgap_clock_since(&t_last) < 1.0) {
+    if (strcmp(msg, last) == 0 && ljgap__clock_since(&t_last) < 1.0) {
         repeats++;
     } else {
         if (repeats) fprintf(stderr, "ljgapd: libmicrohttpd: (%lu more like: %s)\n", repeats, last);

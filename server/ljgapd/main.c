@@ -103,7 +103,7 @@ static int store_open(char *buf, size_t n)
     unsigned queued = 0, running = 0;
     if (ljgapd_srv.cfg.jobs_db) {
         /* a connection for each thread that uses the store: workers, keeper, ops, main */
-        if (ljgap_jobstore_open_pg(ljgapd_srv.cfg.jobs_db,
+        if (ljgap__jobstore_open_pg(ljgapd_srv.cfg.jobs_db,
                                    ljgapd_srv.cfg.jobs.workers + OPS_THREADS + 2, &ljgapd_srv.store,
                                    err, sizeof err) != LJGAP_JOBSTORE_OK) {
             fprintf(stderr, "ljgapd: %s\n", err);
@@ -115,13 +115,13 @@ static int store_open(char *buf, size_t n)
                             "$STATE_DIRECTORY, $XDG_STATE_HOME nor $HOME is set)\n");
             return -1;
         }
-        if (ljgap_jobstore_open_sqlite(ljgapd_srv.cfg.state_dir, &ljgapd_srv.store, err,
+        if (ljgap__jobstore_open_sqlite(ljgapd_srv.cfg.state_dir, &ljgapd_srv.store, err,
                                        sizeof err) != LJGAP_JOBSTORE_OK) {
             fprintf(stderr, "ljgapd: cannot use the state directory: %s\n", err);
             return -1;
         }
     }
-    ljgap_jobstore_counts(ljgapd_srv.store, &queued, &running);
+    ljgap__jobstore_counts(ljgapd_srv.store, &queued, &running);
     if (ljgapd_srv.cfg.jobs_db)
         fprintf(stderr, "ljgapd: jobs kept in %s, shared (%u queued, %u running), lease %g s\n",
                 ljgapd_srv.store->where, queued, running, ljgapd_srv.cfg.jobs.lease_seconds);
@@ -192,14 +192,14 @@ static struct MHD_Daemon *daemon_start(char *host, size_t hostsz)
 static void wait_inflight(const struct timespec *t0, double until)
 {
     const struct timespec tick = {0, 20 * 1000 * 1000};
-    while (atomic_load(&ljgapd_srv.inflight) > 0 && ljgap_clock_since(t0) < until)
+    while (atomic_load(&ljgapd_srv.inflight) > 0 && ljgap__clock_since(t0) < until)
         nanosleep(&tick, NULL);
 }
 
 int main(int argc, char **argv)
 {
     struct MHD_Daemon *d = NULL;
-    ljgap_limits limits;
+    ljgap__limits limits;
     sigset_t sigs;
     char host[INET6_ADDRSTRLEN + 3], files[96], state_dir[4096], mem[32];
     struct timespec t_sig;
@@ -221,10 +221,10 @@ int main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
     if (store_open(state_dir, sizeof state_dir) != 0) return 2; /* never a job store in memory */
 
-    ljgap_limits_default(&limits);
+    ljgap__limits_default(&limits);
     limits.max_seconds = cfg->max_seconds;
     limits.sim_threads = cfg->job_threads;
-    ljgap_handler_set_limits(&limits);
+    ljgap__handler_set_limits(&limits);
     if (getrandom(&ljgapd_srv.id_seed, sizeof ljgapd_srv.id_seed, 0) != sizeof ljgapd_srv.id_seed)
         ljgapd_srv.id_seed = (unsigned)getpid() ^ (unsigned)time(NULL);
     fit_file_limit(files, sizeof files);
@@ -246,7 +246,7 @@ int main(int argc, char **argv)
     ops_cfg = (pool_config){OPS_THREADS, OPS_QUEUE, cfg->queue_wait, NULL};
     ljgapd_srv.cache = http_cache_alloc(cfg->cache_entries, cfg->cache_bytes);
     ljgapd_srv.jobs =
-        ljgap_jobs_alloc(&cfg->jobs, ljgapd_srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
+        ljgap__jobs_alloc(&cfg->jobs, ljgapd_srv.store, ljgapd_job_kinds, ljgapd_job_nkinds);
     ljgapd_srv.slots = pool_start(&slots_cfg);
     ljgapd_srv.ops = pool_start(&ops_cfg);
     ljgapd_srv.conns = conns_start(cfg->receive_s);
@@ -283,12 +283,12 @@ int main(int argc, char **argv)
     fprintf(stderr, "ljgapd: %s, stopping (%u requests in flight)\n", strsignal(sig),
             atomic_load(&ljgapd_srv.inflight));
     lfd = MHD_quiesce_daemon(d);
-    ljgap_jobs_shutdown(
+    ljgap__jobs_shutdown(
         ljgapd_srv.jobs); /* no client waits for jobs: stop them now (they run again) */
     /* Waiting requests get 503 now; computations may finish for grace_s, then are cancelled.
      * Every suspended connection must be resumed before MHD_stop_daemon. */
     if (!pool_stop(ljgapd_srv.slots, cfg->grace_s, cfg->stop_s - cfg->grace_s) ||
-        !pool_stop(ljgapd_srv.ops, 0, cfg->stop_s - ljgap_clock_since(&t_sig))) {
+        !pool_stop(ljgapd_srv.ops, 0, cfg->stop_s - ljgap__clock_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a computation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
@@ -296,21 +296,21 @@ int main(int argc, char **argv)
     if (atomic_load(&ljgapd_srv.inflight) > 0)
         fprintf(stderr, "ljgapd: %u requests did not finish; closing their connections\n",
                 atomic_load(&ljgapd_srv.inflight));
-    if (!ljgap_jobs_wait_idle(ljgapd_srv.jobs, cfg->stop_s - ljgap_clock_since(&t_sig))) {
+    if (!ljgap__jobs_wait_idle(ljgapd_srv.jobs, cfg->stop_s - ljgap__clock_since(&t_sig))) {
         fprintf(stderr, "ljgapd: a simulation ignored its cancel flag; exiting without it\n");
         _exit(0);
     }
     MHD_stop_daemon(d);
     if (lfd != MHD_INVALID_SOCKET) close(lfd);
-    fprintf(stderr, "ljgapd: stopped after %.1f s\n", ljgap_clock_since(&t_sig));
+    fprintf(stderr, "ljgapd: stopped after %.1f s\n", ljgap__clock_since(&t_sig));
     rc = 0;
 end:
     if (ljgapd_srv.web_fd >= 0) close(ljgapd_srv.web_fd);
     pool_free(ljgapd_srv.slots);
     pool_free(ljgapd_srv.ops);
     conns_free(ljgapd_srv.conns);
-    ljgap_jobs_free(ljgapd_srv.jobs);
-    ljgap_jobstore_close(ljgapd_srv.store);
+    ljgap__jobs_free(ljgapd_srv.jobs);
+    ljgap__jobstore_close(ljgapd_srv.store);
     fftw_cleanup(); /* the simulations' FFTW planner state is global: freed once no job runs */
     http_cache_free(ljgapd_srv.cache);
     budget_free(ljgapd_srv.bodies);

@@ -127,7 +127,7 @@ static void start_task(pool *s, pool_task *t)
 {
     list_remove(&s->waiting, t);
     t->state = T_RUNNING;
-    t->t_start = ljgap_clock_now();
+    t->t_start = ljgap__clock_now();
     t->waited_s = t->t_start - t->t_submit;
     list_append(&s->running, t);
 }
@@ -138,7 +138,7 @@ static void end_waiting(pool *s, pool_task *t, pool_outcome o, pool_task **woken
     list_remove(&s->waiting, t);
     t->state = T_ENDED;
     t->outcome = o;
-    t->waited_s = ljgap_clock_now() - t->t_submit;
+    t->waited_s = ljgap__clock_now() - t->t_submit;
     t->next = *woken;
     *woken = t;
 }
@@ -176,7 +176,7 @@ static void *slot_main(void *arg)
         t->run(t);
 
         pthread_mutex_lock(&s->lock);
-        t->ran_s = ljgap_clock_now() - t->t_start;
+        t->ran_s = ljgap__clock_now() - t->t_start;
         if (s->cfg.mem) budget_release(s->cfg.mem, t->mem);
         next = s->waiting.head ? pick(s) : NULL; /* chosen while t still holds its slot */
         if (s->waiting.head && s->cfg.mem) pthread_cond_broadcast(&s->work); /* bytes freed */
@@ -237,7 +237,7 @@ static void *watch_main(void *arg)
                 t->cancel = 1;
             }
         }
-        now = ljgap_clock_now();
+        now = ljgap__clock_now();
         for (pool_task *t = s->waiting.head, *next; t; t = next) {
             next = t->next;
             if (now - t->t_submit >= s->cfg.queue_wait) {
@@ -273,8 +273,8 @@ pool *pool_start(const pool_config *c)
     s->pfd = calloc(npoll, sizeof *s->pfd);
     s->pser = calloc(npoll, sizeof *s->pser);
     pthread_mutex_init(&s->lock, NULL);
-    ljgap_cond_init_monotonic(&s->work);
-    ljgap_cond_init_monotonic(&s->ended);
+    ljgap__cond_init_monotonic(&s->work);
+    ljgap__cond_init_monotonic(&s->ended);
     if (!s->threads || !s->pfd || !s->pser) {
         pool_free(s);
         return NULL;
@@ -303,7 +303,7 @@ pool_status pool_submit(pool *s, pool_task *t)
         s->stats.full++;
     } else {
         t->serial = ++s->serial;
-        t->t_submit = ljgap_clock_now();
+        t->t_submit = ljgap__clock_now();
         t->t_start = 0;
         t->waited_s = t->ran_s = 0;
         t->cancel = 0;
@@ -353,7 +353,7 @@ static int wait_running(pool *s, const struct timespec *until)
 
 int pool_stop(pool *s, double grace_s, double wait_s)
 {
-    struct timespec grace = ljgap_deadline_in(grace_s), until = ljgap_deadline_in(grace_s + wait_s);
+    struct timespec grace = ljgap__deadline_in(grace_s), until = ljgap__deadline_in(grace_s + wait_s);
     pool_task *woken = NULL;
     int idle;
 

@@ -75,7 +75,7 @@ struct pool_task {
     /* private */
     pool_task *prev, *next;   /* the waiting or the running list */
     unsigned long serial;     /* submission number (identifies it to the watchdog) */
-    double t_submit, t_start; /* ljgap_clock_now() at submit and at slot */
+    double t_submit, t_start; /* ljgap__clock_now() at submit and at slot */
     int state;                /* waiting, running, ended */
     int hung_up;              /* the watchdog saw the hang-up */
 };

@@ -62,11 +62,11 @@ enum MHD_Result ljgapd_respond_json(struct MHD_Connection *c, request *r, int st
     return ljgapd_respond_json_hdr(c, r, status, ctype, body, len, NULL, NULL);
 }
 
-enum MHD_Result ljgapd_respond_reply(struct MHD_Connection *c, request *r, ljgap_reply *rep)
+enum MHD_Result ljgapd_respond_reply(struct MHD_Connection *c, request *r, ljgap__reply *rep)
 {
     enum MHD_Result ret =
         ljgapd_respond_json(c, r, rep->status, rep->content_type, rep->body, rep->len);
-    ljgap_reply_free(rep);
+    ljgap__reply_free(rep);
     return ret;
 }
 
@@ -95,7 +95,7 @@ static enum MHD_Result problem_answer(struct MHD_Connection *c, request *r, int 
                                       const char *slug, const char *detail, const char *header,
                                       const char *value)
 {
-    const ljgap_problem_doc *doc = ljgap_problem_find(slug);
+    const ljgap__problem_doc *doc = ljgap__problem_find(slug);
     cJSON *p = cJSON_CreateObject();
     char type[64], *text = NULL;
     struct MHD_Response *resp = NULL;
@@ -147,7 +147,7 @@ enum MHD_Result ljgapd_respond_static(struct MHD_Connection *c, request *r, cons
                                       size_t len, const char *ctype, const char *etag,
                                       const char *if_none_match)
 {
-    int fresh = ljgap_web_etag_match(if_none_match, etag);
+    int fresh = ljgapd_web_etag_match(if_none_match, etag);
     struct MHD_Response *resp =
         MHD_create_response_from_buffer(fresh ? 0 : len, (void *)data, MHD_RESPMEM_PERSISTENT);
     if (resp) {

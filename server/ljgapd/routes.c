@@ -8,7 +8,7 @@
  * lock, a disk, a DELETE waiting for a job to stop), so they run on ljgapd_srv.ops (work.c).
  *
  * A row may take a text body besides JSON (text_max > 0): POST /v1/psd takes a height matrix as
- * text/plain or text/csv of up to LJGAP_TEXT_MAX_BYTES with its query (ljgap_handle_text);
+ * text/plain or text/csv of up to LJGAP_TEXT_MAX_BYTES with its query (ljgap__handle_text);
  * every other body route keeps JSON and --max-body.
  *
  * Simulations: POST /v1/simulations validates at once (400/422 like every endpoint) and stores
@@ -94,8 +94,8 @@ static enum MHD_Result route_version(struct MHD_Connection *c, request *r)
 /* GET /v1/validity: the validity map (server/api/validity.c), on the I/O thread: no computing. */
 static enum MHD_Result route_validity(struct MHD_Connection *c, request *r)
 {
-    ljgap_reply rep;
-    ljgap_validity_reply(&rep);
+    ljgap__reply rep;
+    ljgap__validity_reply(&rep);
     return ljgapd_respond_reply(c, r, &rep);
 }
 
@@ -115,33 +115,33 @@ static enum MHD_Result route_openapi(struct MHD_Connection *c, request *r)
  * each of at most LJGAP_SIM_GAPS_MAX gaps). */
 static size_t sim_memory(const char *body, size_t len)
 {
-    return ljgap_memest_sim_request(body, len, ljgapd_srv.cfg.job_threads) + len +
+    return ljgap__memest_sim_request(body, len, ljgapd_srv.cfg.job_threads) + len +
            (size_t)LJGAP_SIM_GAPS_MAX * 1024;
 }
 
 /* A stored simulation request, parsed again (so a restarted daemon can run it) and run, once
  * its memory is reserved in the budget (the worker waits for it, polling, while the job may
  * be cancelled; submission refused jobs that could never fit). */
-static void sim_job_run(void *ctx, const char *body, size_t len, const ljgap_job_ctl *ctl,
-                        ljgap_reply *out)
+static void sim_job_run(void *ctx, const char *body, size_t len, const ljgap__job_ctl *ctl,
+                        ljgap__reply *out)
 {
-    ljgap_sim_control sc = {(double)ljgapd_srv.cfg.job_seconds, ctl->cancel, ctl->progress,
+    ljgap__sim_control sc = {(double)ljgapd_srv.cfg.job_seconds, ctl->cancel, ctl->progress,
                             ctl->ctx};
     const struct timespec tick = {0, 50 * 1000 * 1000};
     size_t need = sim_memory(body, len), held = 0;
-    ljgap_sim_request *sr;
+    ljgap__sim_request *sr;
 
     if (need <= ljgapd_compute_memory_max())
         while (!(held = budget_try(ljgapd_srv.mem, need) ? need : 0) &&
                !(ctl->cancel && *ctl->cancel))
             nanosleep(&tick, NULL);
-    sr = ljgap_sim_request_parse(body, len, out);
-    if (sr) ljgap_sim_request_run(sr, &sc, out); /* else the problem is in *out */
-    ljgap_sim_request_free(sr);
+    sr = ljgap__sim_request_parse(body, len, out);
+    if (sr) ljgap__sim_request_run(sr, &sc, out); /* else the problem is in *out */
+    ljgap__sim_request_free(sr);
     budget_release(ljgapd_srv.mem, held);
 }
 
-const ljgap_job_kind ljgapd_job_kinds[] = {{SIM_KIND, sim_job_run, NULL}};
+const ljgap__job_kind ljgapd_job_kinds[] = {{SIM_KIND, sim_job_run, NULL}};
 const size_t ljgapd_job_nkinds = sizeof ljgapd_job_kinds / sizeof ljgapd_job_kinds[0];
 
 /* Moves a malloc'd JSON string into out as a 2xx answer. */
@@ -162,10 +162,10 @@ static void work_oom(work_reply *out)
 /* 503 job-store with Retry-After: the store failed (its reason is logged, not sent). */
 static void work_store_failed(work_reply *out)
 {
-    char *p = ljgap_job_problem(MHD_HTTP_SERVICE_UNAVAILABLE, "job-store", "Job store unavailable",
+    char *p = ljgap__job_problem(MHD_HTTP_SERVICE_UNAVAILABLE, "job-store", "Job store unavailable",
                                 "the job store cannot be read or written just now; retry after "
                                 "the given seconds");
-    fprintf(stderr, "ljgapd: job store: %s\n", ljgap_jobstore_errmsg());
+    fprintf(stderr, "ljgapd: job store: %s\n", ljgap__jobstore_errmsg());
     if (!p) {
         work_oom(out);
         return;
@@ -182,11 +182,11 @@ static void work_store_failed(work_reply *out)
 static void sim_submit_work(request *r, const volatile int *cancel, work_reply *out)
 {
     const char *body = r->body ? r->body : "";
-    ljgap_sim_request *sr = ljgap_sim_request_parse(body, r->len, &out->rep);
+    ljgap__sim_request *sr = ljgap__sim_request_parse(body, r->len, &out->rep);
     char id[LJGAP_JOB_ID_LEN + 1], *status = NULL;
 
     if (!sr) return;            /* out->rep holds the problem */
-    ljgap_sim_request_free(sr); /* valid: the job is its body, parsed again when it runs */
+    ljgap__sim_request_free(sr); /* valid: the job is its body, parsed again when it runs */
     /* refused now, not when a worker takes it: its working memory (and its result, a few
      * hundred bytes a gap) must fit the budget, whichever store keeps it */
     size_t need = sim_memory(body, r->len), most = ljgapd_compute_memory_max();
@@ -203,7 +203,7 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
                  a, ljgapd_srv.cfg.job_threads, ljgapd_srv.cfg.job_threads == 1 ? "" : "s", b, m);
         return;
     }
-    switch (ljgap_jobs_submit(ljgapd_srv.jobs, SIM_KIND, body, r->len, id)) {
+    switch (ljgap__jobs_submit(ljgapd_srv.jobs, SIM_KIND, body, r->len, id)) {
     case LJGAP_JOBS_OK:
         break;
     case LJGAP_JOBS_FULL:
@@ -229,7 +229,7 @@ static void sim_submit_work(request *r, const volatile int *cancel, work_reply *
         return;
     }
     /* a job just stored is not evicted (only finished ones are) */
-    switch (ljgap_jobs_status(ljgapd_srv.jobs, id, &status)) {
+    switch (ljgap__jobs_status(ljgapd_srv.jobs, id, &status)) {
     case LJGAP_JOBS_OK:
         break;
     case LJGAP_JOBS_NOMEM:
@@ -263,9 +263,9 @@ static void sim_job_work(request *r, const volatile int *cancel, work_reply *out
     int final = 1, st;
 
     if (strcmp(r->method, "DELETE") == 0)
-        st = ljgap_jobs_cancel(ljgapd_srv.jobs, id, ljgapd_srv.cfg.cancel_wait_s, &status, &final);
+        st = ljgap__jobs_cancel(ljgapd_srv.jobs, id, ljgapd_srv.cfg.cancel_wait_s, &status, &final);
     else
-        st = ljgap_jobs_status(ljgapd_srv.jobs, id, &status);
+        st = ljgap__jobs_status(ljgapd_srv.jobs, id, &status);
     if (st == LJGAP_JOBS_UNKNOWN) {
         out->problem = MHD_HTTP_NOT_FOUND;
         snprintf(out->detail, sizeof out->detail,
@@ -287,7 +287,7 @@ static void sim_job_work(request *r, const volatile int *cancel, work_reply *out
         return;
     }
     /* JSON, or a done job's result as CSV, as Accept asks (406 when neither will do) */
-    ljgap_sim_status_answer(status, MHD_HTTP_OK, r->accept, &out->rep);
+    ljgap__sim_status_answer(status, MHD_HTTP_OK, r->accept, &out->rep);
     free(status);
 }
 
@@ -306,8 +306,8 @@ static int problems_exists(const char *rest)
 
 static enum MHD_Result route_problems(struct MHD_Connection *c, request *r)
 {
-    ljgap_reply rep;
-    ljgap_problem_page(r->url + strlen(LJGAP_PROBLEM_BASE), &rep);
+    ljgap__reply rep;
+    ljgap__problem_page(r->url + strlen(LJGAP_PROBLEM_BASE), &rep);
     return ljgapd_respond_reply(c, r, &rep);
 }
 

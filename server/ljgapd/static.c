@@ -21,19 +21,19 @@ static const char *static_rel(const char *rest)
 
 int ljgapd_static_exists(const char *rest)
 {
-    return ljgap_web_type(static_rel(rest)) != NULL;
+    return ljgapd_web_type(static_rel(rest)) != NULL;
 }
 
 enum MHD_Result ljgapd_route_static(struct MHD_Connection *c, request *r)
 {
     const char *rel = static_rel(r->url + 1);
-    const char *ctype = ljgap_web_type(rel);
-    const ljgap_web_file *f;
+    const char *ctype = ljgapd_web_type(rel);
+    const ljgapd_web_file *f;
     struct stat st;
     int fd = -1;
 
     if (ljgapd_srv.web_fd < 0) {
-        if (!(f = ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, r->url)))
+        if (!(f = ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, r->url)))
             return ljgapd_respond_problem(c, r, MHD_HTTP_NOT_FOUND, "no such page", NULL, NULL);
         return ljgapd_respond_static(
             c, r, f->data, f->len, f->type, f->etag,

@@ -5,7 +5,7 @@
 
 #define NAME_MAX_LEN 128 /* longest file name served */
 
-const char *ljgap_web_type(const char *rel)
+const char *ljgapd_web_type(const char *rel)
 {
     static const struct {
         const char *ext;
@@ -35,22 +35,22 @@ const char *ljgap_web_type(const char *rel)
     return NULL;
 }
 
-const char *ljgap_web_name(const char *path)
+const char *ljgapd_web_name(const char *path)
 {
     if (!path || path[0] != '/') return NULL;
     return path[1] ? path + 1 : "index.html";
 }
 
-const ljgap_web_file *ljgap_web_find(const ljgap_web_file *table, size_t n, const char *path)
+const ljgapd_web_file *ljgapd_web_find(const ljgapd_web_file *table, size_t n, const char *path)
 {
-    const char *name = ljgap_web_name(path);
-    if (!name || !ljgap_web_type(name)) return NULL;
+    const char *name = ljgapd_web_name(path);
+    if (!name || !ljgapd_web_type(name)) return NULL;
     for (size_t i = 0; i < n; i++)
         if (strcmp(table[i].name, name) == 0) return &table[i];
     return NULL;
 }
 
-int ljgap_web_etag_match(const char *inm, const char *etag)
+int ljgapd_web_etag_match(const char *inm, const char *etag)
 {
     size_t el = strlen(etag);
     if (!inm) return 0;

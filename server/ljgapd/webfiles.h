@@ -19,25 +19,25 @@ typedef struct {
     const unsigned char *data; /* its bytes */
     size_t len;                /* how many */
     const char *etag;          /* a strong validator of the bytes, quoted: "\"0123abcd...\"" */
-} ljgap_web_file;
+} ljgapd_web_file;
 
 /* The table compiled into ljgapd: $(BUILD)/gen/web.c, written by tools/embed.c (only the
  * daemon links it). */
-extern const ljgap_web_file ljgapd_web_files[];
+extern const ljgapd_web_file ljgapd_web_files[];
 extern const size_t ljgapd_web_nfiles;
 
 /* The Content-Type of rel (a name below the page's root), or NULL when it is not allowlisted. */
-const char *ljgap_web_type(const char *rel);
+const char *ljgapd_web_type(const char *rel);
 
 /* The name a request path asks for: path without its leading '/', index.html for "/";
  * NULL when path does not start with '/'. Points into path or at a constant. */
-const char *ljgap_web_name(const char *path);
+const char *ljgapd_web_name(const char *path);
 
 /* The file of table (n entries) that the request path names, or NULL. */
-const ljgap_web_file *ljgap_web_find(const ljgap_web_file *table, size_t n, const char *path);
+const ljgapd_web_file *ljgapd_web_find(const ljgapd_web_file *table, size_t n, const char *path);
 
 /* Does an If-None-Match header value (NULL when absent) match etag ("*", or the tag in a
  * comma-separated list, weak W/ tags compared weakly as RFC 9110 §13.1.2 asks)? */
-int ljgap_web_etag_match(const char *if_none_match, const char *etag);
+int ljgapd_web_etag_match(const char *if_none_match, const char *etag);
 
 #endif

@@ -43,7 +43,7 @@ struct work_task {
 static void task_free(work_task *w)
 {
     if (!w) return;
-    ljgap_reply_free(&w->out.rep);
+    ljgap__reply_free(&w->out.rep);
     free(w->out.key);
     free(w);
 }
@@ -202,7 +202,7 @@ static int over_budget(struct MHD_Connection *c, request *r, size_t est, enum MH
  * that hits can be sent as stored: the answer up to its LJGAP_REPLY_UNCACHED_TAIL, then
  * LJGAP_REPLY_CACHED_TAIL (parsing and printing the answer again would cost about 2 % of a whole
  * adhesion request). */
-static void cache_store(const char *key, size_t klen, const ljgap_reply *rep)
+static void cache_store(const char *key, size_t klen, const ljgap__reply *rep)
 {
     static const char yes[] = LJGAP_REPLY_CACHED_TAIL;
     const size_t n = sizeof LJGAP_REPLY_UNCACHED_TAIL - 1;
@@ -215,9 +215,9 @@ static void cache_store(const char *key, size_t klen, const ljgap_reply *rep)
 /* On a compute slot: the handler, then the cache. */
 static void compute_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_call call = {cancel, r->accept};
+    ljgap__call call = {cancel, r->accept};
     const char *endpoint = r->url + strlen("/v1/");
-    ljgap_handle_call(endpoint, r->body ? r->body : "", r->len, &call, &out->rep);
+    ljgap__handle_call(endpoint, r->body ? r->body : "", r->len, &call, &out->rep);
     if (out->rep.status >= 200 && out->rep.status < 300 && out->key)
         cache_store(out->key, out->klen, &out->rep);
 }
@@ -250,7 +250,7 @@ enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r)
     }
     if (over_budget(
             c, r,
-            ljgap_memest_json(r->len, ljgap_json_values(r->body, r->len), ljgapd_srv.cfg.slots),
+            ljgap__memest_json(r->len, ljgap__json_values(r->body, r->len), ljgapd_srv.cfg.slots),
             &ret)) {
         free(key);
         return ret;
@@ -260,22 +260,22 @@ enum MHD_Result ljgapd_route_compute(struct MHD_Connection *c, request *r)
 
 int ljgapd_compute_exists(const char *rest)
 {
-    return ljgap_handler_has(rest);
+    return ljgap__handler_has(rest);
 }
 
 /* On a compute slot: a text upload (its body can be 64 MiB: no cache). */
 static void psd_text_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_call call = {cancel, r->accept};
-    ljgap_handle_text("psd", r->params, r->nparams, r->body ? r->body : "", r->len, &call,
+    ljgap__call call = {cancel, r->accept};
+    ljgap__handle_text("psd", r->params, r->nparams, r->body ? r->body : "", r->len, &call,
                       &out->rep);
 }
 
 /* On a compute slot: an instrument file (files.h), not cached. */
 static void psd_file_work(request *r, const volatile int *cancel, work_reply *out)
 {
-    ljgap_call call = {cancel, r->accept};
-    ljgap_handle_file("psd", r->params, r->nparams, (const unsigned char *)r->body, r->len, &call,
+    ljgap__call call = {cancel, r->accept};
+    ljgap__handle_file("psd", r->params, r->nparams, (const unsigned char *)r->body, r->len, &call,
                       &out->rep);
     if (out->rep.status == 415) { /* no format read here: what the route takes */
         out->header = "Accept-Post";
@@ -293,7 +293,7 @@ enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
             size_t points = r->len / 2 + 1, cap = LJGAP_FILES_MAX_POINTS;
             if (points > cap) points = cap;
             r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
-            if (over_budget(c, r, ljgap_memest_psd_text(points) + 16 * points, &ret)) return ret;
+            if (over_budget(c, r, ljgap__memest_psd_text(points) + 16 * points, &ret)) return ret;
         }
         return ljgapd_route_offload(c, r, ljgapd_srv.slots, psd_file_work, NULL, 0);
     }
@@ -302,7 +302,7 @@ enum MHD_Result ljgapd_route_psd(struct MHD_Connection *c, request *r)
         size_t values = r->tokens.tokens, cap = LJGAP_TOPO_POINTS_DEFAULT;
         r->accept = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
         /* the parser stops after its cap of heights */
-        if (over_budget(c, r, ljgap_memest_psd_text(values < cap ? values + 1 : cap + 1), &ret))
+        if (over_budget(c, r, ljgap__memest_psd_text(values < cap ? values + 1 : cap + 1), &ret))
             return ret;
     }
     return ljgapd_route_offload(c, r, ljgapd_srv.slots, psd_text_work, NULL, 0);

@@ -19,7 +19,7 @@
  * maps.
  */
 #include "input_error.h"
-#include "clock.h" /* ljgap_clock_now */
+#include "clock.h" /* ljgap__clock_now */
 #include "ljgap_uncert.h"
 #include "ljgap_units.h"
 
@@ -66,7 +66,7 @@ static void pert_free(pert *p)
 
 /* The perturbed PSDs of s into p (p->K = 0 when the PSD has no uncertainty or the request does
  * not want it). A status only for an allocation failure; other failures warn and leave none. */
-static int pert_make(job *j, const ljgap_psd_spec *s, pert *p)
+static int pert_make(job *j, const ljgap__psd_spec *s, pert *p)
 {
     memset(p, 0, sizeof *p);
     if (!j->rq.input_error) return LJGAP_OK;
@@ -79,13 +79,13 @@ static int pert_make(job *j, const ljgap_psd_spec *s, pert *p)
         if (hL > 0) p->h[p->npar] = hL, p->par[p->npar++] = level_names[s->level];
         for (size_t q = 0; q < p->npar; q++)
             for (int sign = 1; sign >= -1; sign -= 2) {
-                ljgap_psd_spec t = *s;
+                ljgap__psd_spec t = *s;
                 int st;
                 if (p->par[q][0] == 'D')
                     t.D += sign * p->h[q] * s->D_err;
                 else
                     t.level_val += sign * p->h[q] * s->level_err;
-                if ((st = ljgap_psd_from_spec(&p->psd[p->K], &t))) {
+                if ((st = ljgap__psd_from_spec(&p->psd[p->K], &t))) {
                     pert_free(p);
                     if (st == LJGAP_ENOMEM) return st;
                     ljgap_warn(&j->rq.warn,
@@ -102,7 +102,7 @@ static int pert_make(job *j, const ljgap_psd_spec *s, pert *p)
     {
         ljgap_psd base;
         double *zero = NULL;
-        int st = ljgap_psd_from_spec(&base, s);
+        int st = ljgap__psd_from_spec(&base, s);
         if (st) return st == LJGAP_ENOMEM ? st : LJGAP_OK; /* the answer itself says why */
         if (!s->P_err && !(zero = calloc(s->n, sizeof *zero))) {
             ljgap_psd_free(&base);
@@ -173,7 +173,7 @@ static void *solve_worker(void *arg)
         pthread_mutex_unlock(&sw->lock);
         if (k >= sw->p->K) return NULL;
         if (o.tol < IE_TOL) o.tol = IE_TOL;
-        o.max_seconds = sw->j->deadline - ljgap_clock_now();
+        o.max_seconds = sw->j->deadline - ljgap__clock_now();
         o.cancel = sw->j->cancel;
         sw->st[k] =
             o.max_seconds > 0 ? sw->fn(sw->ctx, k, &sw->p->psd[k], &o, &sw->w[k]) : LJGAP_ECAP;
@@ -184,7 +184,7 @@ static void *solve_worker(void *arg)
  * LJGAP_ENOMEM (j->oom) or the status that stopped all of them (with a warning). */
 static int solve_all(job *j, const pert *p, solve_fn fn, void *ctx, int *ok)
 {
-    const ljgap_limits *lim = ljgap_handler_limits();
+    const ljgap__limits *lim = ljgap__handler_limits();
     long nt = lim->sweep_threads > 0 ? lim->sweep_threads : sysconf(_SC_NPROCESSORS_ONLN);
     pthread_t th[IE_THREADS_MAX];
     size_t started = 0, good = 0;
@@ -244,7 +244,7 @@ static int solve_curve(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_op
 }
 
 typedef struct {
-    const ljgap_request *rq;
+    const ljgap__request *rq;
     double *sigma; /* K × nx: each PDF's mean traction (the PDFs themselves are let go at once:
                     * a perturbed solve holds no more memory than the nominal one) */
 } pdf_ctx;
@@ -253,7 +253,7 @@ static int solve_pdf(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_opts
                      ljgap_warnings *w)
 {
     pdf_ctx *c = ctx;
-    const ljgap_request *rq = c->rq;
+    const ljgap__request *rq = c->rq;
     ljgap_pdf *p = calloc(rq->nx, sizeof *p);
     int st = p ? ljgap_pdf_compute(psd, o, rq->g_ave, rq->x, rq->nx, rq->has_grid ? rq->grid : NULL,
                                    p, w)
@@ -272,10 +272,10 @@ static int solve_pdf(void *ctx, size_t k, const ljgap_psd *psd, const ljgap_opts
 static void put_sd(job *j, cJSON *obj, const char *key, double v, const char *label, long idx)
 {
     if (isfinite(v)) {
-        ljgap_ans_num(j, obj, key, v, label, idx);
+        ljgap__ans_num(j, obj, key, v, label, idx);
         return;
     }
-    ljgap_ans_put(j, obj, key, cJSON_CreateNull());
+    ljgap__ans_put(j, obj, key, cJSON_CreateNull());
     ljgap_warn(&j->rq.warn, "input_error: a spread that too few perturbed PSDs answered is null");
 }
 
@@ -283,13 +283,13 @@ static void put_sd(job *j, cJSON *obj, const char *key, double v, const char *la
 static void put_sds(job *j, cJSON *obj, const char *key, const double *v, size_t n,
                     const char *label)
 {
-    cJSON *a = ljgap_ans_put(j, obj, key, cJSON_CreateArray());
+    cJSON *a = ljgap__ans_put(j, obj, key, cJSON_CreateArray());
     for (size_t i = 0; a && i < n; i++)
         put_sd(j, a, NULL, v[i], label, (long)i);
 }
 
 /* meta.input_error: how (once an answer). */
-static void put_meta(job *j, const pert *p, const ljgap_psd_spec *s)
+static void put_meta(job *j, const pert *p, const ljgap__psd_spec *s)
 {
     cJSON *m, *a;
     if (j->ie_meta || !(m = j->ie_meta = cJSON_CreateObject())) {
@@ -297,34 +297,34 @@ static void put_meta(job *j, const pert *p, const ljgap_psd_spec *s)
         return;
     }
     if (p->linear) {
-        ljgap_ans_put(j, m, "method", cJSON_CreateString("linear"));
-        a = ljgap_ans_put(j, m, "parameters", cJSON_CreateArray());
+        ljgap__ans_put(j, m, "method", cJSON_CreateString("linear"));
+        a = ljgap__ans_put(j, m, "parameters", cJSON_CreateArray());
         for (size_t q = 0; a && q < p->npar; q++)
-            ljgap_ans_put(j, a, NULL, cJSON_CreateString(p->par[q]));
-        ljgap_ans_put(j, m, "samples", cJSON_CreateNumber((double)p->K));
-        ljgap_ans_put(j, m, "relative_error", cJSON_CreateNull());
-        ljgap_ans_put(j, m, "detail",
+            ljgap__ans_put(j, a, NULL, cJSON_CreateString(p->par[q]));
+        ljgap__ans_put(j, m, "samples", cJSON_CreateNumber((double)p->K));
+        ljgap__ans_put(j, m, "relative_error", cJSON_CreateNull());
+        ljgap__ans_put(j, m, "detail",
                       cJSON_CreateString("central differences at each parameter ± 1 σ "
                                          "(parameters independent); exact for an answer linear "
                                          "in them"));
     } else {
         char d[300];
-        ljgap_ans_put(j, m, "method", cJSON_CreateString("sampling"));
-        ljgap_ans_put(j, m, "samples", cJSON_CreateNumber((double)p->K));
-        ljgap_ans_put(j, m, "seed", cJSON_CreateNumber((double)IE_SEED));
-        ljgap_ans_num(j, m, "relative_error", ljgap_uncert_sd_relerr(p->K),
+        ljgap__ans_put(j, m, "method", cJSON_CreateString("sampling"));
+        ljgap__ans_put(j, m, "samples", cJSON_CreateNumber((double)p->K));
+        ljgap__ans_put(j, m, "seed", cJSON_CreateNumber((double)IE_SEED));
+        ljgap__ans_num(j, m, "relative_error", ljgap_uncert_sd_relerr(p->K),
                       "meta.input_error.relative_error", -1);
-        ljgap_ans_put(j, m, "knots",
+        ljgap__ans_put(j, m, "knots",
                       cJSON_CreateString(s->P_corr ? "correlated with their neighbours (P_corr)"
                                                    : "independent (no P_corr)"));
-        ljgap_ans_num(j, m, "corr_scale", p->info.corr_scale, "meta.input_error.corr_scale", -1);
+        ljgap__ans_num(j, m, "corr_scale", p->info.corr_scale, "meta.input_error.corr_scale", -1);
         snprintf(d, sizeof d,
                  "the standard deviation over %zu PSDs whose knots' ln P are drawn from "
                  "N(ln P, Σ), Σ of P_err%s, and the tail exponent from its exponent_err",
                  p->K, s->P_corr ? " and P_corr" : "");
-        ljgap_ans_put(j, m, "detail", cJSON_CreateString(d));
+        ljgap__ans_put(j, m, "detail", cJSON_CreateString(d));
     }
-    ljgap_ans_num(j, m, "solves_tol", fmax(j->rq.opts.tol, IE_TOL), "meta.input_error.solves_tol",
+    ljgap__ans_num(j, m, "solves_tol", fmax(j->rq.opts.tol, IE_TOL), "meta.input_error.solves_tol",
                   -1);
 }
 
@@ -363,7 +363,7 @@ static void summary_sd(job *j, const pert *p, const ljgap_summary *sum, const in
 static cJSON *put_summary_sd(job *j, cJSON *obj, const char *key, const ljgap_summary *sd,
                              const char *label)
 {
-    cJSON *o = ljgap_ans_put(j, obj, key, cJSON_CreateObject());
+    cJSON *o = ljgap__ans_put(j, obj, key, cJSON_CreateObject());
     const struct {
         const char *name;
         double v;
@@ -384,7 +384,7 @@ static cJSON *put_summary_sd_si(job *j, cJSON *obj, const char *key, const ljgap
                                 const char *label)
 {
     ljgap_si_summary si;
-    cJSON *o = ljgap_ans_put(j, obj, key, cJSON_CreateObject());
+    cJSON *o = ljgap__ans_put(j, obj, key, cJSON_CreateObject());
     const struct {
         const char *name;
         const ljgap_est *e;
@@ -408,7 +408,7 @@ static cJSON *si_of(job *j)
 
 /* "extrapolated" of a table PSD: the share of m0 beyond its last knot and of Δγeff (one solve
  * of the table cut there). */
-static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summary *sum)
+static void put_extrapolated(job *j, const ljgap__psd_spec *s, const ljgap_summary *sum)
 {
     ljgap_psd base, cut;
     ljgap_summary t;
@@ -417,14 +417,14 @@ static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summar
     cJSON *e;
     int st;
     if (!j->rq.input_error || s->kind != LJGAP_PSD_TABLE) return;
-    if ((st = ljgap_psd_from_spec(&base, s))) {
+    if ((st = ljgap__psd_from_spec(&base, s))) {
         if (st == LJGAP_ENOMEM) j->oom = 1;
         return;
     }
     mf = ljgap_uncert_beyond(&base, base.k[base.n - 1]);
     if (mf > 0) {
         if (o.tol < CUT_TOL) o.tol = CUT_TOL; /* a fraction, wanted to 1e-3 of dgamma_eff */
-        o.max_seconds = j->deadline - ljgap_clock_now();
+        o.max_seconds = j->deadline - ljgap__clock_now();
         o.cancel = j->cancel;
         st = o.max_seconds > 0 ? ljgap_psd_truncate(&cut, &base, base.k[base.n - 1]) : LJGAP_ECAP;
         if (!st) {
@@ -440,13 +440,13 @@ static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summar
                        "(%s); dgamma_eff_fraction is null",
                        ljgap_strerror(st));
     }
-    e = ljgap_ans_put(j, j->ans, "extrapolated", cJSON_CreateObject());
-    ljgap_ans_num(j, e, "k_last", base.k[base.n - 1], "extrapolated.k_last", -1);
-    ljgap_ans_num(j, e, "m0_fraction", mf, "extrapolated.m0_fraction", -1);
+    e = ljgap__ans_put(j, j->ans, "extrapolated", cJSON_CreateObject());
+    ljgap__ans_num(j, e, "k_last", base.k[base.n - 1], "extrapolated.k_last", -1);
+    ljgap__ans_num(j, e, "m0_fraction", mf, "extrapolated.m0_fraction", -1);
     if (isfinite(df)) /* else null: the warning above says why */
-        ljgap_ans_num(j, e, "dgamma_eff_fraction", df, "extrapolated.dgamma_eff_fraction", -1);
+        ljgap__ans_num(j, e, "dgamma_eff_fraction", df, "extrapolated.dgamma_eff_fraction", -1);
     else
-        ljgap_ans_put(j, e, "dgamma_eff_fraction", cJSON_CreateNull());
+        ljgap__ans_put(j, e, "dgamma_eff_fraction", cJSON_CreateNull());
     if (mf > EXTRAP_WARN || df > EXTRAP_WARN)
         ljgap_warn(&j->rq.warn,
                    "%.0f %% of m0 and %.0f %% of dgamma_eff come from beyond the table's last "
@@ -457,7 +457,7 @@ static void put_extrapolated(job *j, const ljgap_psd_spec *s, const ljgap_summar
 
 /* The K summaries (and curves at x) of s's perturbed PSDs; 1 when input_error is to be
  * written (p->K > 0), with sd's errs the summary's spreads. */
-static int curve_spread(job *j, const ljgap_psd_spec *s, pert *p, curve_ctx *c, int *ok,
+static int curve_spread(job *j, const ljgap__psd_spec *s, pert *p, curve_ctx *c, int *ok,
                         ljgap_summary *sd)
 {
     if (pert_make(j, s, p)) {
@@ -482,7 +482,7 @@ static int curve_spread(job *j, const ljgap_psd_spec *s, pert *p, curve_ctx *c, 
     return 1;
 }
 
-void ljgap_ie_adhesion(job *j, const ljgap_summary *sum)
+void ljgap__ie_adhesion(job *j, const ljgap_summary *sum)
 {
     pert p;
     curve_ctx c = {0};
@@ -497,9 +497,9 @@ void ljgap_ie_adhesion(job *j, const ljgap_summary *sum)
     put_extrapolated(j, &j->rq.psd, sum);
 }
 
-void ljgap_ie_traction(job *j, const ljgap_summary *sum)
+void ljgap__ie_traction(job *j, const ljgap_summary *sum)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     pert p;
     curve_ctx c = {.x = rq->x, .nx = rq->nx};
     int ok[LJGAP_UNCERT_KMAX];
@@ -516,10 +516,10 @@ void ljgap_ie_traction(job *j, const ljgap_summary *sum)
                 pt[i] = pert_sd(&p, x, ok);
                 pt[rq->nx + i] = pt[i] * (rq->has_material ? ljgap_units_sigma0(&rq->mat) : 1);
             }
-            ie = ljgap_ans_put(j, j->ans, "input_error", cJSON_CreateObject());
+            ie = ljgap__ans_put(j, j->ans, "input_error", cJSON_CreateObject());
             put_sds(j, ie, "sigma", pt, rq->nx, "input_error.sigma");
             put_summary_sd(j, ie, "summary", &sd, "input_error.summary");
-            if (si && (sie = ljgap_ans_put(j, si, "input_error", cJSON_CreateObject()))) {
+            if (si && (sie = ljgap__ans_put(j, si, "input_error", cJSON_CreateObject()))) {
                 put_sds(j, sie, "sigma_Pa", pt + rq->nx, rq->nx, "si.input_error.sigma_Pa");
                 put_summary_sd_si(j, sie, "summary", &sd, "si.input_error.summary");
             }
@@ -531,9 +531,9 @@ void ljgap_ie_traction(job *j, const ljgap_summary *sum)
     put_extrapolated(j, &rq->psd, sum);
 }
 
-void ljgap_ie_pdf(job *j)
+void ljgap__ie_pdf(job *j)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     pert p;
     pdf_ctx c = {.rq = rq};
     int ok[LJGAP_UNCERT_KMAX];
@@ -551,20 +551,20 @@ void ljgap_ie_pdf(job *j)
         return;
     }
     if (!solve_all(j, &p, solve_pdf, &c, ok)) {
-        arr = ljgap_ans_put(j, ljgap_ans_put(j, j->ans, "input_error", cJSON_CreateObject()),
+        arr = ljgap__ans_put(j, ljgap__ans_put(j, j->ans, "input_error", cJSON_CreateObject()),
                             "pdfs", cJSON_CreateArray());
         if (si)
-            sarr = ljgap_ans_put(j, ljgap_ans_put(j, si, "input_error", cJSON_CreateObject()),
+            sarr = ljgap__ans_put(j, ljgap__ans_put(j, si, "input_error", cJSON_CreateObject()),
                                  "pdfs", cJSON_CreateArray());
         for (size_t i = 0; arr && i < rq->nx; i++) {
             double sd;
             for (size_t k = 0; k < p.K; k++)
                 x[k] = c.sigma[k * rq->nx + i];
             sd = pert_sd(&p, x, ok);
-            put_sd(j, ljgap_ans_put(j, arr, NULL, cJSON_CreateObject()), "sigma", sd,
+            put_sd(j, ljgap__ans_put(j, arr, NULL, cJSON_CreateObject()), "sigma", sd,
                    "input_error.pdfs.sigma", (long)i);
             if (sarr)
-                put_sd(j, ljgap_ans_put(j, sarr, NULL, cJSON_CreateObject()), "sigma_Pa",
+                put_sd(j, ljgap__ans_put(j, sarr, NULL, cJSON_CreateObject()), "sigma_Pa",
                        sd * ljgap_units_sigma0(&rq->mat), "si.input_error.pdfs.sigma_Pa", (long)i);
         }
     }
@@ -572,9 +572,9 @@ void ljgap_ie_pdf(job *j)
     pert_free(&p);
 }
 
-void ljgap_ie_contact(job *j, const ljgap_summary *sum)
+void ljgap__ie_contact(job *j, const ljgap_summary *sum)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     pert p;
     curve_ctx c = {0};
     int ok[LJGAP_UNCERT_KMAX], okc[LJGAP_UNCERT_KMAX];
@@ -592,10 +592,10 @@ void ljgap_ie_contact(job *j, const ljgap_summary *sum)
             x[4][k] = ct[k].tabor_eff.value, x[5][k] = ct[k].lambda.value;
         }
         ie = put_summary_sd(j, j->ans, "input_error", &sd, "input_error");
-        po = ljgap_ans_put(j, ie, "pull_off_N", cJSON_CreateObject());
+        po = ljgap__ans_put(j, ie, "pull_off_N", cJSON_CreateObject());
         for (size_t f = 0; po && f < 4; f++)
             put_sd(j, po, names[f], pert_sd(&p, x[f], okc), "input_error.pull_off_N", (long)f);
-        put_sd(j, ljgap_ans_put(j, ie, "tabor", cJSON_CreateObject()), "effective",
+        put_sd(j, ljgap__ans_put(j, ie, "tabor", cJSON_CreateObject()), "effective",
                pert_sd(&p, x[4], okc), "input_error.tabor.effective", -1);
         put_sd(j, ie, "maugis_lambda", pert_sd(&p, x[5], okc), "input_error.maugis_lambda", -1);
         if (si) put_summary_sd_si(j, si, "input_error", &sd, "si.input_error");
@@ -604,19 +604,19 @@ void ljgap_ie_contact(job *j, const ljgap_summary *sum)
     put_extrapolated(j, &rq->psd, sum);
 }
 
-void ljgap_ie_sweep(job *j, const ljgap_summary *sum, const int *st)
+void ljgap__ie_sweep(job *j, const ljgap_summary *sum, const int *st)
 {
-    const ljgap_request *rq = &j->rq;
+    const ljgap__request *rq = &j->rq;
     cJSON *results = cJSON_GetObjectItemCaseSensitive(j->ans, "results"), *si = si_of(j);
     cJSON *sir = si ? cJSON_GetObjectItemCaseSensitive(si, "results") : NULL;
     for (size_t i = 0; results && i < rq->nx && !j->oom; i++) {
-        ljgap_psd_spec s;
+        ljgap__psd_spec s;
         pert p;
         curve_ctx c = {0};
         int ok[LJGAP_UNCERT_KMAX];
         ljgap_summary sd;
         if (st[i]) continue;
-        ljgap_request_sweep_spec(rq, i, &s);
+        ljgap__request_sweep_spec(rq, i, &s);
         /* the varied field's value is exact: its error does not apply */
         if (rq->vary == LJGAP_VARY_M0 || rq->vary == LJGAP_VARY_C) s.level_err = 0;
         if (rq->vary == LJGAP_VARY_D) s.D_err = 0;

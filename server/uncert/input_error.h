@@ -15,14 +15,14 @@
 #include "answer.h"
 
 /* adhesion: input_error {g_eq, sigma_max, g_at_max, dgamma_eff}, extrapolated, si */
-void ljgap_ie_adhesion(job *j, const ljgap_summary *sum);
+void ljgap__ie_adhesion(job *j, const ljgap_summary *sum);
 /* traction: input_error {sigma[], summary {...}}, extrapolated, si {sigma_Pa[], summary} */
-void ljgap_ie_traction(job *j, const ljgap_summary *sum);
+void ljgap__ie_traction(job *j, const ljgap_summary *sum);
 /* pdf: input_error {pdfs [{sigma}]}, si {pdfs [{sigma_Pa}]} */
-void ljgap_ie_pdf(job *j);
+void ljgap__ie_pdf(job *j);
 /* contact: the adhesion's and {pull_off_N {...}, tabor {effective}, maugis_lambda} */
-void ljgap_ie_contact(job *j, const ljgap_summary *sum);
+void ljgap__ie_contact(job *j, const ljgap_summary *sum);
 /* sweep: results[i].input_error (and si.results[i]) for each value computed (st[i] == 0) */
-void ljgap_ie_sweep(job *j, const ljgap_summary *sum, const int *st);
+void ljgap__ie_sweep(job *j, const ljgap_summary *sum, const int *st);
 
 #endif

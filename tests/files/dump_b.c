@@ -32,9 +32,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: dump_b FORMAT FILE [CHANNEL]\n");
         return 64;
     }
-    const ljgap_files_format *fmts[] = {&ljgap_files_x3p, &ljgap_files_sur, &ljgap_files_metropro,
-                                        &ljgap_files_netcdf};
-    const ljgap_files_format *f = NULL;
+    const ljgap__files_format *fmts[] = {&ljgap__files_x3p, &ljgap__files_sur, &ljgap__files_metropro,
+                                        &ljgap__files_netcdf};
+    const ljgap__files_format *f = NULL;
     for (size_t i = 0; i < 4; i++)
         if (!strcmp(fmts[i]->name, argv[1])) f = fmts[i];
     FILE *in = fopen(argv[2], "rb");
@@ -48,8 +48,8 @@ int main(int argc, char **argv)
         if ((len += got) == cap) buf = realloc(buf, cap *= 2);
     fclose(in);
     if (!buf) return 4;
-    ljgap_files_map map;
-    ljgap_files_err err;
+    ljgap__files_map map;
+    ljgap__files_err err;
     memset(&err, 0, sizeof err);
     int probe = f->probe(buf, len);
     int rc = f->read(buf, len, argc > 3 ? argv[3] : NULL, &map, &err);

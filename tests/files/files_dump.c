@@ -1,4 +1,4 @@
-/* files_dump.c -- build/tests/files/files_dump: what ljgap_files_read makes of a file, for the
+/* files_dump.c -- build/tests/files/files_dump: what ljgap__files_read makes of a file, for the
  * tests (tests/files/run.sh compares it with the generators' values and with Gwyddion's).
  *
  *   files_dump FILE [FORMAT [CHANNEL]]   prints "key value" lines (format, channel, channels,
@@ -48,12 +48,12 @@ static int truncations(const unsigned char *buf, size_t len)
     for (size_t n = 0; n < len; n += (n < 2048 ? 1 : step)) {
         /* a copy of exactly n bytes: the sanitizers see a read past it */
         unsigned char *c = malloc(n ? n : 1);
-        ljgap_files_map m;
-        ljgap_files_err e;
+        ljgap__files_map m;
+        ljgap__files_err e;
         if (!c) return 2;
         memcpy(c, buf, n);
-        int st = ljgap_files_read(c, n, NULL, NULL, &m, &e);
-        ljgap_files_map_free(&m);
+        int st = ljgap__files_read(c, n, NULL, NULL, &m, &e);
+        ljgap__files_map_free(&m);
         free(c);
         counts[st >= 0 && st <= 5 ? st : 5]++;
         tried++;
@@ -68,8 +68,8 @@ int main(int argc, char **argv)
 {
     size_t len = 0;
     unsigned char *buf;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     if (argc >= 3 && strcmp(argv[1], "--truncate") == 0) {
         if (!(buf = slurp(argv[2], &len))) return perror(argv[2]), 2;
         int r = truncations(buf, len);
@@ -82,12 +82,12 @@ int main(int argc, char **argv)
     }
     if (!(buf = slurp(argv[1], &len))) return perror(argv[1]), 2;
     const char *fmt = argc > 2 && strcmp(argv[2], "-") ? argv[2] : NULL;
-    int st = ljgap_files_read(buf, len, fmt, argc > 3 ? argv[3] : NULL, &m, &e);
+    int st = ljgap__files_read(buf, len, fmt, argc > 3 ? argv[3] : NULL, &m, &e);
     free(buf);
     if (st) {
         printf("error %d format %s offset %ld member %s: %s\n", st, e.format ? e.format : "-",
                e.offset, e.member[0] ? e.member : "-", e.msg);
-        ljgap_files_map_free(&m);
+        ljgap__files_map_free(&m);
         return 1;
     }
     printf("format %s\nchannel %s\nchannel_index %d\nchannels", m.format, m.channel,
@@ -100,6 +100,6 @@ int main(int argc, char **argv)
            m.tip_radius, m.periodic);
     for (size_t i = 0; i < m.nx * m.ny; i++)
         printf("%.17g\n", m.z[i]);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     return 0;
 }

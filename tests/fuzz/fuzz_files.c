@@ -1,16 +1,16 @@
 /* fuzz_files.c -- libFuzzer target on the instrument-file readers (server/files/, files.h) and
- * on POST /v1/psd with a file (ljgap_handle_file).
+ * on POST /v1/psd with a file (ljgap__handle_file).
  *
  * An input is two bytes and a file: the first byte picks the format (0: recognised by content,
  * k: the registry's k-th, forced; past the end: a name no format has), the second the channel
  * (0xff or 0x7f: the default, else its low 5 bits as an index "N"), and its high bit sends the
- * file through ljgap_handle_file (the handler's answer, the PSD included) instead of
- * ljgap_files_read alone. The file is handed over in a buffer of exactly its length, so that
+ * file through ljgap__handle_file (the handler's answer, the PSD included) instead of
+ * ljgap__files_read alone. The file is handed over in a buffer of exactly its length, so that
  * AddressSanitizer sees any read past it.
  *
  * Besides crashes, leaks and undefined behaviour, every result is checked, and a breach aborts
  * (in the replay, tests/fuzz/replay.c, it is counted):
- *   - ljgap_files_read returns one of files.h's statuses; on success the map has 1 to
+ *   - ljgap__files_read returns one of files.h's statuses; on success the map has 1 to
  *     LJGAP_FILES_MAX_POINTS points, every height finite or NaN, missing equal to the NaN
  *     count and below the points, sizes finite and >= 0, the channel index within the
  *     channels, every text NUL-terminated within its field; on a failure the map holds no
@@ -30,22 +30,22 @@
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int ljgap_fuzz_noabort;
-long ljgap_fuzz_failures;
+int ljgap__fuzz_noabort;
+long ljgap__fuzz_failures;
 
 static void breach(const char *what)
 {
     fprintf(stderr, "fuzz_files: %s\n", what);
-    ljgap_fuzz_failures++;
-    if (!ljgap_fuzz_noabort) abort();
+    ljgap__fuzz_failures++;
+    if (!ljgap__fuzz_noabort) abort();
 }
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
-    ljgap_limits l = LJGAP_LIMITS_INIT;
+    ljgap__limits l = LJGAP_LIMITS_INIT;
     l.max_seconds = 2;
     l.max_topo_points = 1 << 16;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     return 0;
 }
 
@@ -54,7 +54,7 @@ static int terminated(const char *s, size_t n)
     return memchr(s, '\0', n) != NULL;
 }
 
-static void check_map(const ljgap_files_map *m)
+static void check_map(const ljgap__files_map *m)
 {
     size_t N = m->nx * m->ny, nan = 0;
     if (!m->z || !m->nx || !m->ny || m->nx > LJGAP_FILES_MAX_POINTS / m->ny) {
@@ -81,7 +81,7 @@ static void check_map(const ljgap_files_map *m)
         if (!terminated(m->channels[i], sizeof m->channels[i])) breach("a channel title runs on");
 }
 
-static void check_answer(const ljgap_reply *r)
+static void check_answer(const ljgap__reply *r)
 {
     cJSON *a = r->body ? cJSON_ParseWithLength(r->body, r->len) : NULL;
     if (!a || !cJSON_IsObject(a)) {
@@ -104,7 +104,7 @@ static void check_answer(const ljgap_reply *r)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    const ljgap_files_format *const *f = ljgap_files_formats();
+    const ljgap__files_format *const *f = ljgap__files_formats();
     int nf = 0;
     char channel[8] = "";
     if (size < 2) return 0;
@@ -118,25 +118,25 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!file) return 0;
     memcpy(file, data + 2, n);
     if (via_handler) {
-        ljgap_param q[2];
+        ljgap__param q[2];
         size_t nq = 0;
-        if (format) q[nq++] = (ljgap_param){"format", format};
-        if (channel[0]) q[nq++] = (ljgap_param){"channel", channel};
-        ljgap_reply r;
-        ljgap_handle_file("psd", q, nq, file, n, NULL, &r);
+        if (format) q[nq++] = (ljgap__param){"format", format};
+        if (channel[0]) q[nq++] = (ljgap__param){"channel", channel};
+        ljgap__reply r;
+        ljgap__handle_file("psd", q, nq, file, n, NULL, &r);
         check_answer(&r);
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     } else {
-        ljgap_files_map m;
-        ljgap_files_err e;
-        int st = ljgap_files_read(file, n, format, channel[0] ? channel : NULL, &m, &e);
+        ljgap__files_map m;
+        ljgap__files_err e;
+        int st = ljgap__files_read(file, n, format, channel[0] ? channel : NULL, &m, &e);
         if (st < 0 || st > LJGAP_FILES_TOOBIG) breach("an unknown status");
         if (st == 0) check_map(&m);
         if (st && m.z) breach("a failed read left heights");
         if (st == LJGAP_FILES_BAD && !e.format) breach("a bad file without its format");
         if (!terminated(e.msg, sizeof e.msg) || !terminated(e.member, sizeof e.member))
             breach("an error text runs on");
-        ljgap_files_map_free(&m);
+        ljgap__files_map_free(&m);
     }
     free(file);
     return 0;

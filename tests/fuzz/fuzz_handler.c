@@ -1,10 +1,10 @@
-/* fuzz_handler.c -- libFuzzer target on ljgap_handle_call, the one request handler.
+/* fuzz_handler.c -- libFuzzer target on ljgap__handle_call, the one request handler.
  *
  * An input is "ENDPOINT\nBODY" or "ENDPOINT\tACCEPT\nBODY": the first line names the endpoint
  * (adhesion, traction, pdf, sweep, contact, psd, psd/combine, or anything else for a 404;
- * "simulations" goes through ljgap_sim_request_parse and, when valid, ljgap_sim_request_run,
- * and then, when there is an Accept, its result through ljgap_sim_status_answer as a finished job's
- * status; "text:NAME?QUERY" is a text upload, ljgap_handle_text with the query split at '&' and '='
+ * "simulations" goes through ljgap__sim_request_parse and, when valid, ljgap__sim_request_run,
+ * and then, when there is an Accept, its result through ljgap__sim_status_answer as a finished job's
+ * status; "text:NAME?QUERY" is a text upload, ljgap__handle_text with the query split at '&' and '='
  * into parameters, as the daemon hands them over after decoding), and after a tab the value of
  * the Accept header; the rest is the request body, handed over in a buffer of exactly its
  * length (no NUL after it), so that any read past the end is caught by AddressSanitizer. An
@@ -33,7 +33,7 @@
  *     field of /topography, /fit or /material, or /NAME of a parameter that was sent.
  *
  * The pseudo-endpoint "@x-forwarded-for" feeds the body (up to its first NUL) to
- * ljgap_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
+ * ljgapd_forwarded_client, the daemon's reading of an X-Forwarded-For header: it must answer 0
  * with an empty name, or 1 with a numeric address that fits the buffer, for buffers of any size.
  *
  * The pseudo-endpoint "@max-memory" feeds the body (up to its first NUL) to budget_parse_size,
@@ -43,27 +43,27 @@
  * The pseudo-endpoint "@heights" checks the count of a text height matrix's values that the
  * daemon makes as the body arrives (memest.h, its memory estimate): counted in two pieces split
  * anywhere it is the count of the whole, and it bounds the heights the parser reads
- * (ljgap_topo_text_parse), so the estimate made from it bounds the computation's memory.
+ * (ljgap__topo_text_parse), so the estimate made from it bounds the computation's memory.
  *
  * The pseudo-endpoint "@jobrow" fuzzes what the daemon reads back from its job store (a
  * database row is input too). The body's first seven lines are a job record's id, state,
  * progress, created, started, finished and now (numbers through strtod, so inf, nan and hex
  * come through), the rest is the stored answer (none when there are fewer lines); the record
- * goes through ljgap_job_status_json, whose answer must be one JSON object in valid UTF-8 with
+ * goes through ljgap__job_status_json, whose answer must be one JSON object in valid UTF-8 with
  * finite numbers, a known status, progress in [0, 1], elapsed_ms >= 0, a result object exactly
  * when done and a well-formed problem whenever it failed.
  *
  * The pseudo-endpoint "@pgrow" fuzzes the PostgreSQL job store's reading of a row: the body's
  * lines are the row's columns in libpq's text format (jobstore.h, LJGAP_PG_*; "\\N" for NULL;
  * thirteen lines make a claim's row, with the request in bytea hex), read by
- * ljgap_jobstore_pg_row into a record that must stay within its bounds and then pass the same
+ * ljgap__jobstore_pg_row into a record that must stay within its bounds and then pass the same
  * checks as "@jobrow".
  *
  * The handler's limits are lowered (fuzz_limits, and sim_control for simulations) so each
  * input runs in milliseconds; a computation that ignored them would trip libFuzzer's -timeout.
  *
  * The same file is linked into build/.../fuzz/replay (tests/fuzz/replay.c) with the normal
- * compiler: there a breach is counted (ljgap_fuzz_failures) instead of aborting.
+ * compiler: there a breach is counted (ljgap__fuzz_failures) instead of aborting.
  */
 #include "budget.h"
 #include "forwarded.h"
@@ -92,11 +92,11 @@ int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* Set by the replay driver: count breaches instead of aborting. */
-int ljgap_fuzz_noabort;
-long ljgap_fuzz_failures;
+int ljgap__fuzz_noabort;
+long ljgap__fuzz_failures;
 
 /* The lowered limits: short computations, few points, few samples, two sweep threads. */
-static const ljgap_limits fuzz_limits = {.max_seconds = 0.25,
+static const ljgap__limits fuzz_limits = {.max_seconds = 0.25,
                                          .max_samples = 2000,
                                          .max_points = 16,
                                          .sweep_threads = 2,
@@ -104,12 +104,12 @@ static const ljgap_limits fuzz_limits = {.max_seconds = 0.25,
                                          .cancel = NULL};
 
 /* A simulation runs for at most this long (it answers 422 cap-exceeded beyond). */
-static const ljgap_sim_control sim_control = {.max_seconds = 0.25};
+static const ljgap__sim_control sim_control = {.max_seconds = 0.25};
 
-static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
+static void breach(const char *ep, const ljgap__reply *r, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
+static void breach(const char *ep, const ljgap__reply *r, const char *fmt, ...)
 {
     va_list ap;
     fprintf(stderr, "fuzz_handler: endpoint \"%.40s\", status %d: ", ep, r->status);
@@ -117,8 +117,8 @@ static void breach(const char *ep, const ljgap_reply *r, const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     va_end(ap);
     fprintf(stderr, "\n  body: %.600s\n", r->body ? r->body : "(null)");
-    ljgap_fuzz_failures++;
-    if (!ljgap_fuzz_noabort) abort();
+    ljgap__fuzz_failures++;
+    if (!ljgap__fuzz_noabort) abort();
 }
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
@@ -128,7 +128,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
         fprintf(stderr, "fuzz_handler: no C.UTF-8 locale to check answers with\n");
         abort();
     }
-    ljgap_handler_set_limits(&fuzz_limits);
+    ljgap__handler_set_limits(&fuzz_limits);
     return 0;
 }
 
@@ -201,7 +201,7 @@ static const char *pointer_problem(const cJSON *doc, const char *ptr)
 
 /* A text upload: its parameters and the number of lines of its body. */
 typedef struct {
-    ljgap_param p[64];
+    ljgap__param p[64];
     size_t np;
     size_t lines;
 } text_req;
@@ -245,7 +245,7 @@ static const char *text_pointer_problem(const text_req *t, const char *ptr)
     return "names neither a field nor a parameter that was sent";
 }
 
-static void check_problem(const char *ep, const ljgap_reply *r, const cJSON *doc, const cJSON *req,
+static void check_problem(const char *ep, const ljgap__reply *r, const cJSON *doc, const cJSON *req,
                           const text_req *text)
 {
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(doc, "type");
@@ -293,7 +293,7 @@ static int si_errors_ok(const cJSON *doc)
     return !computed || cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(si, "error"));
 }
 
-static void check_ok(const char *ep, const ljgap_reply *r, const cJSON *doc)
+static void check_ok(const char *ep, const ljgap__reply *r, const cJSON *doc)
 {
     const cJSON *meta = cJSON_GetObjectItemCaseSensitive(doc, "meta"), *w, *ms;
     const cJSON *res = cJSON_GetObjectItemCaseSensitive(doc, "results");
@@ -328,14 +328,14 @@ static void fuzz_forwarded(const char *body, size_t len)
     static const size_t sizes[] = {0, 1, 8, 16, 46, 64};
     char *xff = malloc(len + 1), out[64];
     unsigned char addr[sizeof(struct in6_addr)];
-    ljgap_reply none = {0};
+    ljgap__reply none = {0};
     if (!xff) return;
     memcpy(xff, body, len);
     xff[len] = '\0';
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
         int ok;
         memset(out, 'x', sizeof out);
-        ok = ljgap_forwarded_client(xff, out, sizes[i]);
+        ok = ljgapd_forwarded_client(xff, out, sizes[i]);
         if (ok != 0 && ok != 1) breach("@x-forwarded-for", &none, "returned %d", ok);
         if (sizes[i] == 0) continue;
         if (!memchr(out, '\0', sizes[i])) breach("@x-forwarded-for", &none, "name not ended");
@@ -349,7 +349,7 @@ static void fuzz_forwarded(const char *body, size_t len)
 /* "@max-memory": budget_parse_size refuses or reads exactly DIGITS[KMG][B]. */
 static void fuzz_max_memory(const char *body, size_t len)
 {
-    ljgap_reply none = {0};
+    ljgap__reply none = {0};
     char *s = strndup(body, len), *end = NULL;
     size_t v = 0;
     unsigned long long digits;
@@ -369,18 +369,18 @@ static void fuzz_max_memory(const char *body, size_t len)
 /* "@heights": the count of values, whole or in two pieces, bounds the heights parsed. */
 static void fuzz_heights(const char *body, size_t len)
 {
-    ljgap_reply none = {0};
-    ljgap_token_count whole = {0}, parts = {0};
-    ljgap_topo_spec t = {0};
-    ljgap_verr ve = {0};
+    ljgap__reply none = {0};
+    ljgap__token_count whole = {0}, parts = {0};
+    ljgap__topo_spec t = {0};
+    ljgap__verr ve = {0};
     size_t cut = len ? (unsigned char)body[0] % (len + 1) : 0;
-    ljgap_token_feed(&whole, body, len);
-    ljgap_token_feed(&parts, body, cut);
-    ljgap_token_feed(&parts, body + cut, len - cut);
+    ljgap__token_feed(&whole, body, len);
+    ljgap__token_feed(&parts, body, cut);
+    ljgap__token_feed(&parts, body + cut, len - cut);
     if (parts.tokens != whole.tokens)
         breach("@heights", &none, "%zu values in pieces, %zu whole", parts.tokens, whole.tokens);
     if (!(ve.errors = cJSON_CreateArray())) return;
-    ljgap_topo_text_parse(body, len, 4096, &t, &ve);
+    ljgap__topo_text_parse(body, len, 4096, &t, &ve);
     if (t.h && t.nx * t.ny > whole.tokens)
         breach("@heights", &none, "%zu x %zu heights read, %zu values counted", t.nx, t.ny,
                whole.tokens);
@@ -403,16 +403,16 @@ static int next_line(const char **p, const char *end, char *buf, size_t size)
 
 /* A record read back, shown as a status object (ep: the pseudo-endpoint, for messages), checked
  * against the contract; frees the record. */
-static void check_record(const char *ep, ljgap_job_record *rec)
+static void check_record(const char *ep, ljgap__job_record *rec)
 {
     static const char *const states[] = {"queued", "running", "done", "failed", "cancelled"};
-    ljgap_reply r = {0}, pr = {0};
+    ljgap__reply r = {0}, pr = {0};
     cJSON *doc = NULL;
     const cJSON *st, *prog, *ms, *res, *prob;
     int known = 0;
     r.status = 200;
     r.content_type = "application/json";
-    if (!(r.body = ljgap_job_status_json(rec))) goto end; /* out of memory */
+    if (!(r.body = ljgap__job_status_json(rec))) goto end; /* out of memory */
     r.len = strlen(r.body);
     if (!utf8_ok(r.body, r.len)) breach(ep, &r, "not valid UTF-8");
     doc = cJSON_ParseWithLength(r.body, r.len);
@@ -447,21 +447,21 @@ static void check_record(const char *ep, ljgap_job_record *rec)
 end:
     cJSON_Delete(doc);
     free(r.body);
-    ljgap_job_record_clear(rec);
+    ljgap__job_record_clear(rec);
 }
 
 /* "@jobrow": a stored record, shown as a status object. */
 static void fuzz_jobrow(const char *body, size_t len)
 {
     const char *p = body, *end = body + len;
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     double *num[] = {&rec.progress, &rec.created, &rec.started, &rec.finished, &rec.now};
     char line[64], state[32] = "";
     int lines = 0;
     memset(&rec, 0, sizeof rec);
     lines += next_line(&p, end, rec.id, sizeof rec.id);
     lines += next_line(&p, end, state, sizeof state);
-    rec.state = ljgap_job_state_parse(state);
+    rec.state = ljgap__job_state_parse(state);
     for (size_t i = 0; i < sizeof num / sizeof num[0]; i++)
         if (next_line(&p, end, line, sizeof line)) *num[i] = strtod(line, NULL), lines++;
     if (lines == 7) { /* an answer follows, possibly empty */
@@ -475,12 +475,12 @@ static void fuzz_jobrow(const char *body, size_t len)
 
 /* "@pgrow": a row of the PostgreSQL job store in libpq's text format, one column a line
  * (LJGAP_PG_* order; "\\N" is SQL NULL; the request column makes it a claim's row), read by
- * ljgap_jobstore_pg_row and then shown as a status object. */
+ * ljgap__jobstore_pg_row and then shown as a status object. */
 static void fuzz_pgrow(char *body, size_t len)
 {
     const char *val[LJGAP_PG_COLS] = {0};
     int lens[LJGAP_PG_COLS] = {0}, ncols = 0;
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     char *p = body, *end = body + len;
     while (p < end && ncols < LJGAP_PG_COLS) {
         char *nl = memchr(p, '\n', (size_t)(end - p));
@@ -493,14 +493,14 @@ static void fuzz_pgrow(char *body, size_t len)
         p = nl ? nl + 1 : end;
     }
     memset(&rec, 0, sizeof rec);
-    if (ljgap_jobstore_pg_row(&rec, val, lens,
+    if (ljgap__jobstore_pg_row(&rec, val, lens,
                               ncols == LJGAP_PG_COLS ? LJGAP_PG_COLS : LJGAP_PG_REQUEST) != 0)
         return; /* out of memory: cleared */
     if (strlen(rec.id) > LJGAP_JOB_ID_LEN || strlen(rec.kind) > LJGAP_JOB_KIND_MAX ||
         (rec.request && rec.request[rec.request_len] != '\0') ||
         (rec.answer && rec.answer[rec.answer_len] != '\0') ||
         (ncols < LJGAP_PG_COLS && rec.request)) {
-        ljgap_reply none = {0};
+        ljgap__reply none = {0};
         breach("@pgrow", &none, "a record out of its bounds");
     }
     check_record("@pgrow", &rec);
@@ -522,7 +522,7 @@ static int cell_ok(const char *s, size_t n)
 }
 
 /* A CSV answer: '#' lines, a header, rows of as many cells as the header, good cells. */
-static void check_csv(const char *ep, const ljgap_reply *r)
+static void check_csv(const char *ep, const ljgap__reply *r)
 {
     const char *p = r->body, *e = r->body + r->len;
     long header = -1, line = 0;
@@ -556,7 +556,7 @@ static void check_csv(const char *ep, const ljgap_reply *r)
 }
 
 /* A finished job's status around a simulation's 200 result, answered as accept asks. */
-static void sim_status(const char *accept, ljgap_reply *r)
+static void sim_status(const char *accept, ljgap__reply *r)
 {
     static const char head[] = "{\"id\":\"0\",\"status\":\"done\",\"progress\":1,"
                                "\"elapsed_ms\":1,\"result\":";
@@ -565,8 +565,8 @@ static void sim_status(const char *accept, ljgap_reply *r)
     memcpy(st, head, sizeof head - 1);
     memcpy(st + sizeof head - 1, r->body, r->len);
     strcpy(st + sizeof head - 1 + r->len, "}");
-    ljgap_reply_free(r);
-    ljgap_sim_status_answer(st, 200, accept, r);
+    ljgap__reply_free(r);
+    ljgap__sim_status_answer(st, 200, accept, r);
     free(st);
 }
 
@@ -578,7 +578,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     size_t eplen = tab ? (size_t)(tab - data) : linelen;
     size_t len = nl ? size - linelen - 1 : 0;
     char *ep = malloc(eplen + 1), *body = malloc(len ? len : 1), *accept = NULL;
-    ljgap_reply r = {0};
+    ljgap__reply r = {0};
     cJSON *doc = NULL, *req = NULL;
     text_req *text = NULL;
     const char *end = NULL;
@@ -608,7 +608,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fuzz_pgrow(body, len);
         goto end;
     }
-    known = ljgap_handler_has(ep);
+    known = ljgap__handler_has(ep);
     if (strncmp(ep, "text:", 5) == 0) {
         /* "text:NAME?a=1&b": split the query in place (ep is ours) */
         char *q = strchr(ep + 5, '?'), *save = NULL;
@@ -625,20 +625,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             text->lines +=
                 body[i] == '\n' || (body[i] == '\r' && i + 1 < len && body[i + 1] != '\n');
         text->lines++;
-        known = ljgap_handler_has_text(ep + 5);
+        known = ljgap__handler_has_text(ep + 5);
         {
-            ljgap_call call = {.accept = accept};
-            ljgap_handle_text(ep + 5, text->p, text->np, body, len, &call, &r);
+            ljgap__call call = {.accept = accept};
+            ljgap__handle_text(ep + 5, text->p, text->np, body, len, &call, &r);
         }
     } else if (strcmp(ep, "simulations") == 0) {
-        ljgap_sim_request *sr = ljgap_sim_request_parse(body, len, &r);
+        ljgap__sim_request *sr = ljgap__sim_request_parse(body, len, &r);
         known = 1;
-        if (sr) ljgap_sim_request_run(sr, &sim_control, &r);
-        ljgap_sim_request_free(sr);
+        if (sr) ljgap__sim_request_run(sr, &sim_control, &r);
+        ljgap__sim_request_free(sr);
         if (r.status == 200 && accept) sim_status(accept, &r);
     } else {
-        ljgap_call call = {.accept = accept};
-        ljgap_handle_call(ep, body, len, &call, &r);
+        ljgap__call call = {.accept = accept};
+        ljgap__handle_call(ep, body, len, &call, &r);
     }
     if (!r.body || !r.content_type) {
         breach(ep, &r, "no body or no content type");
@@ -672,7 +672,7 @@ end:
     cJSON_Delete(doc);
     cJSON_Delete(req);
     free(text);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     free(ep);
     free(body);
     free(accept);

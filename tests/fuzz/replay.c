@@ -17,8 +17,8 @@
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-extern int ljgap_fuzz_noabort;
-extern long ljgap_fuzz_failures;
+extern int ljgap__fuzz_noabort;
+extern long ljgap__fuzz_failures;
 
 /* Reads the whole file into a malloc'd buffer of exactly its size (1 byte when empty). */
 static uint8_t *slurp(const char *path, size_t *n)
@@ -41,16 +41,16 @@ static int run_file(const char *path)
 {
     size_t n;
     uint8_t *data = slurp(path, &n);
-    long before = ljgap_fuzz_failures;
+    long before = ljgap__fuzz_failures;
     if (!data) {
         printf("not ok - %s: cannot read\n", path);
         return 1;
     }
     LLVMFuzzerTestOneInput(data, n);
     free(data);
-    printf("%s - fuzz input %s\n", ljgap_fuzz_failures == before ? "ok" : "not ok", path);
+    printf("%s - fuzz input %s\n", ljgap__fuzz_failures == before ? "ok" : "not ok", path);
     fflush(stdout);
-    return ljgap_fuzz_failures != before;
+    return ljgap__fuzz_failures != before;
 }
 
 static int by_name(const struct dirent **a, const struct dirent **b)
@@ -61,7 +61,7 @@ static int by_name(const struct dirent **a, const struct dirent **b)
 int main(int argc, char **argv)
 {
     int failed = 0;
-    ljgap_fuzz_noabort = 1;
+    ljgap__fuzz_noabort = 1;
     LLVMFuzzerInitialize(&argc, &argv);
     for (int i = 1; i < argc; i++) {
         struct stat sb;

@@ -8,6 +8,10 @@
                      server/api/ and server/uncert/ include nothing from jobs/, ljgapd/ or cli/,
                      and server/jobs/ nothing from ljgapd/ or cli/ (the daemon and the CLI sit on
                      top); server/files/ (the instrument-file readers) nothing but its own headers
+  check.py names     the names say public or private: an identifier ljgap_NAME (one underscore)
+                     declared or defined outside include/ is one of the installed headers' (the
+                     library's API); internals are ljgap__NAME (core/ and server/) or carry their
+                     module's prefix, and the daemon's (server/ljgapd/) are ljgapd_NAME
   check.py sizes     no .c or .h file of core/, include/, server/ or tools/ is over 900 lines
                      (but those in PENDING, which may not grow) and no folder holds more than
                      16 .c files
@@ -95,6 +99,30 @@ def check_cycles():
            "of the daemon)", "; ".join(upward))
 
 
+def check_names():
+    public = set()
+    for d, _, files in os.walk("include"):
+        for f in files:
+            public |= set(re.findall(r"\bljgap_[A-Za-z0-9]\w*", open(os.path.join(d, f), encoding="utf-8").read()))
+    bad = {}
+    for f in sources():
+        if f.startswith(("include/", "tools/")):
+            continue
+        text = open(f, encoding="utf-8").read()
+        text = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)  # comments may name anything
+        text = re.sub(r'"(?:[^"\\\n]|\\.)*"', '""', text)  # and so may strings
+        names = set(re.findall(r"\bljgap_[A-Za-z0-9]\w*", text)) - public
+        if f.endswith(".c"):  # a .c file's own statics may use any name: only its externs count
+            externs = set()
+            for m in re.finditer(r"^(?!static\b)[A-Za-z_][^;{()=]*?\b(ljgap_[A-Za-z0-9]\w*)\s*[\[(=;]", text, re.M):
+                externs.add(m.group(1))
+            names &= externs | {n for n in names if re.search(r"^\s*(typedef|extern)\b[^;]*\b" + n + r"\b", text, re.M)}
+        for n in names:
+            bad.setdefault(n, f)
+    report(not bad, "internal names are ljgap__NAME, a module's prefix or ljgapd_NAME: ljgap_NAME "
+           "is only the installed headers'", ", ".join(f"{n} ({f})" for n, f in sorted(bad.items())[:12]))
+
+
 def check_sizes():
     big = []
     per_dir = {}
@@ -114,4 +142,4 @@ def check_sizes():
 
 if __name__ == "__main__":
     os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-    {"cycles": check_cycles, "sizes": check_sizes}[sys.argv[1]]()
+    {"cycles": check_cycles, "names": check_names, "sizes": check_sizes}[sys.argv[1]]()

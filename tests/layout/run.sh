@@ -2,12 +2,13 @@
 # The source layout holds (issue 27, docs/source.md): no include cycle between the modules of
 # core/, include/ and server/, no upward include (core/ of server/; server/api/ of jobs/, the
 # daemon or the CLI; server/jobs/ of the daemon or the CLI), no source file over 900 lines and
-# no folder over 16 .c files (tests/layout/check.py). One "ok"/"not ok" line per check; then
+# no folder over 16 .c files, and no internal name with the public prefix ljgap_ (tests/layout/check.py). One "ok"/"not ok" line per check; then
 # each check is shown to fail on a scratch tree that breaks it.
 set -u
 cd "$(dirname "$0")/../.."
 python3 tests/layout/check.py cycles
 python3 tests/layout/check.py sizes
+python3 tests/layout/check.py names
 
 # the checks can fail: a copy of the tree with a cycle, an upward include, a long file, a full
 # folder
@@ -34,4 +35,11 @@ if grep -q '^not ok - no source file over.*long.c' <<<"$out" && grep -q '^not ok
     echo "ok - the layout checks fail on a tree with a long file and a full folder"
 else
     echo "not ok - the layout checks missed a long file or a full folder: $out"
+fi
+printf 'int ljgap_private_thing(void);\n' >>"$tmp/server/api/reply.h"
+out=$(broken names)
+if grep -q '^not ok - internal names.*ljgap_private_thing' <<<"$out"; then
+    echo "ok - the names check fails on a tree with an internal name in the public prefix"
+else
+    echo "not ok - the names check missed an internal ljgap_ name: $out"
 fi

@@ -19,7 +19,7 @@ static void *oom_malloc(size_t n)
     return malloc(n);
 }
 
-/* ljgap_handle(endpoint, body) with its n-th cJSON allocation failing, n = 0, 1, ... (at most
+/* ljgap__handle(endpoint, body) with its n-th cJSON allocation failing, n = 0, 1, ... (at most
  * max) until it answers 200: every other answer must be the 500 out-of-memory problem, and
  * both kinds must be seen. */
 static void oom_sweep(const char *endpoint, const char *body, long max)
@@ -27,10 +27,10 @@ static void oom_sweep(const char *endpoint, const char *body, long max)
     cJSON_Hooks hooks = {oom_malloc, free};
     int saw_oom = 0, saw_ok = 0;
     for (long n = 0; n < max && !saw_ok; n++) {
-        ljgap_reply r;
+        ljgap__reply r;
         oom_left = n;
         cJSON_InitHooks(&hooks);
-        ljgap_handle(endpoint, body, strlen(body), &r);
+        ljgap__handle(endpoint, body, strlen(body), &r);
         cJSON_InitHooks(NULL);
         oom_left = -1;
         assert_non_null(r.body);
@@ -46,7 +46,7 @@ static void oom_sweep(const char *endpoint, const char *body, long max)
                 fail_msg("status %d after %ld allocations: %.300s", r.status, n, r.body);
             saw_ok = 1;
         }
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
     assert_true(saw_oom);
     assert_true(saw_ok);

@@ -93,11 +93,11 @@ static int teardown(void **state)
     return 0;
 }
 
-static ljgap_jobstore *open_pg(const char *url, unsigned conns)
+static ljgap__jobstore *open_pg(const char *url, unsigned conns)
 {
-    ljgap_jobstore *st = NULL;
+    ljgap__jobstore *st = NULL;
     char err[600] = "";
-    int rc = ljgap_jobstore_open_pg(url, conns, &st, err, sizeof err);
+    int rc = ljgap__jobstore_open_pg(url, conns, &st, err, sizeof err);
     if (rc != LJGAP_JOBSTORE_OK) print_error("open: %s\n", err);
     assert_int_equal(rc, LJGAP_JOBSTORE_OK);
     assert_non_null(st);
@@ -107,9 +107,9 @@ static ljgap_jobstore *open_pg(const char *url, unsigned conns)
 /* Opening url fails with status rc, the message says `why` and does not hold `hidden`. */
 static void open_fails(const char *url, int rc, const char *why, const char *hidden)
 {
-    ljgap_jobstore *st = (ljgap_jobstore *)1;
+    ljgap__jobstore *st = (ljgap__jobstore *)1;
     char err[600] = "";
-    assert_int_equal(ljgap_jobstore_open_pg(url, 0, &st, err, sizeof err), rc);
+    assert_int_equal(ljgap__jobstore_open_pg(url, 0, &st, err, sizeof err), rc);
     assert_null(st);
     if (!strstr(err, why) || (hidden && strstr(err, hidden)))
         print_error("message \"%s\" should say \"%s\"%s%s\n", err, why,
@@ -120,7 +120,7 @@ static void open_fails(const char *url, int rc, const char *why, const char *hid
 
 /* ---- the contract, on PostgreSQL ---- */
 
-static ljgap_jobstore *contract_open(void **state)
+static ljgap__jobstore *contract_open(void **state)
 {
     return open_pg(((fixture *)*state)->url, 0);
 }
@@ -171,7 +171,7 @@ static const char *const contract_damages[] = {
 static void test_pg_schema(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_pg(f->url, 0);
+    ljgap__jobstore *st = open_pg(f->url, 0);
     char want[300];
     assert_int_equal(raw_long(f->url, "SELECT version FROM ljgapd.schema_version"), 1);
     assert_int_equal(raw_long(f->url, "SELECT count(*) FROM ljgapd.schema_version"), 1);
@@ -180,17 +180,17 @@ static void test_pg_schema(void **state)
                      2);
     snprintf(want, sizeof want, "%s", f->url); /* postgresql://user@host:port/db, no password */
     assert_string_equal(st->where, want);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
     st = open_pg(f->url, 0);
     assert_int_equal(raw_long(f->url, "SELECT count(*) FROM ljgapd.schema_version"), 1);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
 }
 
 static void *opener(void *p)
 {
     char err[600];
-    ljgap_jobstore *st = NULL;
-    if (ljgap_jobstore_open_pg(getenv("LJGAP_TEST_PG_URL"), 1, &st, err, sizeof err) != 0)
+    ljgap__jobstore *st = NULL;
+    if (ljgap__jobstore_open_pg(getenv("LJGAP_TEST_PG_URL"), 1, &st, err, sizeof err) != 0)
         return NULL;
     return st;
 }
@@ -207,7 +207,7 @@ static void test_pg_concurrent_open(void **state)
         pthread_join(t[i], &st[i]);
     for (int i = 0; i < 4; i++) {
         assert_non_null(st[i]);
-        ljgap_jobstore_close(st[i]);
+        ljgap__jobstore_close(st[i]);
     }
     assert_int_equal(raw_long(f->url, "SELECT count(*) FROM ljgapd.schema_version"), 1);
     assert_int_equal(raw_long(f->url, "SELECT max(version) FROM ljgapd.schema_version"), 1);
@@ -217,69 +217,69 @@ static void test_pg_concurrent_open(void **state)
 static void test_pg_two_daemons(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *a = open_pg(f->url, 0), *b = open_pg(f->url, 0);
-    ljgap_job_record rec;
+    ljgap__jobstore *a = open_pg(f->url, 0), *b = open_pg(f->url, 0);
+    ljgap__job_record rec;
     unsigned q, r;
     int cancel = 0;
     long run;
     create_ok(a, ID_A, "{\"from\":\"a\"}");
     create_ok(b, ID_B, "{}");
     assert_int_equal(state_of(b, ID_A), LJGAP_JOB_QUEUED); /* any daemon answers for any job */
-    assert_int_equal(ljgap_jobstore_counts(b, &q, &r), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_counts(b, &q, &r), LJGAP_JOBSTORE_OK);
     assert_true(q == 2 && r == 0);
-    assert_int_equal(ljgap_jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_OK);
     assert_string_equal(rec.id, ID_A); /* one FIFO queue */
     assert_string_equal(rec.request, "{\"from\":\"a\"}");
     run = rec.run;
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     /* a cancel asked of a reaches b's worker at its next renewal */
-    assert_int_equal(ljgap_jobstore_cancel(a, ID_A, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_cancel(a, ID_A, &rec), LJGAP_JOBSTORE_OK);
     assert_true(rec.state == LJGAP_JOB_RUNNING && rec.cancel == 1);
-    ljgap_job_record_clear(&rec);
-    assert_int_equal(ljgap_jobstore_renew(b, ID_A, run, 0.3, 30, &cancel), LJGAP_JOBSTORE_OK);
+    ljgap__job_record_clear(&rec);
+    assert_int_equal(ljgap__jobstore_renew(b, ID_A, run, 0.3, 30, &cancel), LJGAP_JOBSTORE_OK);
     assert_int_equal(cancel, 1);
-    assert_int_equal(ljgap_jobstore_finish(b, ID_A, run, LJGAP_JOB_CANCELLED, NULL, 0), 0);
+    assert_int_equal(ljgap__jobstore_finish(b, ID_A, run, LJGAP_JOB_CANCELLED, NULL, 0), 0);
     assert_int_equal(state_of(a, ID_A), LJGAP_JOB_CANCELLED);
     /* a daemon dies holding a job: another claims it once the lease lapses, from the start */
     run = claim_ok(a, ID_B, 0.2);
-    ljgap_jobstore_close(a); /* the job stays running, as after a crash */
-    assert_int_equal(ljgap_jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_EMPTY);
+    ljgap__jobstore_close(a); /* the job stays running, as after a crash */
+    assert_int_equal(ljgap__jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_EMPTY);
     sleep_ms(300);
-    assert_int_equal(ljgap_jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_claim(b, "b:1", 30, &rec), LJGAP_JOBSTORE_OK);
     assert_string_equal(rec.id, ID_B);
     assert_true(rec.run == run + 1 && rec.lost == 1 && rec.progress == 0);
     assert_true(rec.now >= rec.started && rec.started > rec.created);
-    ljgap_job_record_clear(&rec);
-    assert_int_equal(ljgap_jobstore_finish(b, ID_B, run, LJGAP_JOB_DONE, "{}", 2),
+    ljgap__job_record_clear(&rec);
+    assert_int_equal(ljgap__jobstore_finish(b, ID_B, run, LJGAP_JOB_DONE, "{}", 2),
                      LJGAP_JOBSTORE_LOST); /* the dead daemon's claim */
-    assert_int_equal(ljgap_jobstore_finish(b, ID_B, run + 1, LJGAP_JOB_DONE, "{}", 2), 0);
-    ljgap_jobstore_close(b);
+    assert_int_equal(ljgap__jobstore_finish(b, ID_B, run + 1, LJGAP_JOB_DONE, "{}", 2), 0);
+    ljgap__jobstore_close(b);
 }
 
 /* Opening never requeues: running jobs may belong to another daemon. */
 static void test_pg_reopen(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_pg(f->url, 0);
-    ljgap_job_record rec;
+    ljgap__jobstore *st = open_pg(f->url, 0);
+    ljgap__job_record rec;
     long run;
     create_ok(st, ID_A, "{}");
     create_ok(st, ID_B, "{}");
     run = claim_ok(st, ID_A, 30);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
     st = open_pg(f->url, 0);
-    assert_int_equal(ljgap_jobstore_get(st, ID_A, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_get(st, ID_A, &rec), LJGAP_JOBSTORE_OK);
     assert_true(rec.state == LJGAP_JOB_RUNNING && rec.run == run && rec.lost == 0);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     claim_ok(st, ID_B, 30); /* not A: its lease holds */
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
 }
 
 /* ---- concurrency ---- */
 
 #define JOBS 40
 typedef struct {
-    ljgap_jobstore *st;
+    ljgap__jobstore *st;
     int n; /* jobs this thread claimed */
     char ids[JOBS][LJGAP_JOB_ID_LEN + 1];
     int errors;        /* store calls that failed */
@@ -289,13 +289,13 @@ typedef struct {
 static void *claimer(void *p)
 {
     worker_arg *w = p;
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     int st;
-    while ((st = ljgap_jobstore_claim(w->st, "t", 30, &rec)) == LJGAP_JOBSTORE_OK) {
+    while ((st = ljgap__jobstore_claim(w->st, "t", 30, &rec)) == LJGAP_JOBSTORE_OK) {
         if (w->n < JOBS) memcpy(w->ids[w->n++], rec.id, sizeof rec.id);
-        if (ljgap_jobstore_finish(w->st, rec.id, rec.run, LJGAP_JOB_DONE, "{}", 2) != 0)
+        if (ljgap__jobstore_finish(w->st, rec.id, rec.run, LJGAP_JOB_DONE, "{}", 2) != 0)
             w->errors++;
-        ljgap_job_record_clear(&rec);
+        ljgap__job_record_clear(&rec);
     }
     if (st != LJGAP_JOBSTORE_EMPTY) w->errors++;
     return NULL;
@@ -305,7 +305,7 @@ static void *claimer(void *p)
 static void test_pg_concurrent_claims(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *a = open_pg(f->url, 2), *b = open_pg(f->url, 2);
+    ljgap__jobstore *a = open_pg(f->url, 2), *b = open_pg(f->url, 2);
     worker_arg w[4];
     pthread_t t[4];
     int seen[JOBS] = {0}, total = 0;
@@ -329,8 +329,8 @@ static void test_pg_concurrent_claims(void **state)
     assert_int_equal(total, JOBS);
     for (int i = 0; i < JOBS; i++)
         assert_int_equal(seen[i], 1);
-    ljgap_jobstore_close(a);
-    ljgap_jobstore_close(b);
+    ljgap__jobstore_close(a);
+    ljgap__jobstore_close(b);
 }
 
 static void *creator(void *p)
@@ -339,8 +339,8 @@ static void *creator(void *p)
     char id[LJGAP_JOB_ID_LEN + 1];
     for (int i = 0; i < 10; i++) {
         int st;
-        ljgap_job_id_new(id);
-        st = ljgap_jobstore_create(w->st, id, "simulation", "{}", 2, 15);
+        ljgap__job_id_new(id);
+        st = ljgap__jobstore_create(w->st, id, "simulation", "{}", 2, 15);
         if (st == LJGAP_JOBSTORE_OK)
             w->created++;
         else if (st == LJGAP_JOBSTORE_FULL)
@@ -355,7 +355,7 @@ static void *creator(void *p)
 static void test_pg_concurrent_cap(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *a = open_pg(f->url, 2), *b = open_pg(f->url, 2);
+    ljgap__jobstore *a = open_pg(f->url, 2), *b = open_pg(f->url, 2);
     worker_arg w[4];
     pthread_t t[4];
     int created = 0, full = 0;
@@ -373,10 +373,10 @@ static void test_pg_concurrent_cap(void **state)
     }
     assert_int_equal(created, 15);
     assert_int_equal(full, 25);
-    assert_int_equal(ljgap_jobstore_counts(a, &q, &r), 0);
+    assert_int_equal(ljgap__jobstore_counts(a, &q, &r), 0);
     assert_int_equal(q, 15);
-    ljgap_jobstore_close(a);
-    ljgap_jobstore_close(b);
+    ljgap__jobstore_close(a);
+    ljgap__jobstore_close(b);
 }
 
 /* The server kills the store's connections (an administrator, a restart): the next calls get
@@ -384,7 +384,7 @@ static void test_pg_concurrent_cap(void **state)
 static void test_pg_reconnect(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_pg(f->url, 2);
+    ljgap__jobstore *st = open_pg(f->url, 2);
     /* (waiting up to 5 s for each to be gone: then its socket is closed) */
     static const char kill_all[] = "SELECT count(pg_terminate_backend(pid, 5000)) FROM "
                                    "pg_stat_activity WHERE application_name = 'ljgapd' AND pid "
@@ -398,16 +398,16 @@ static void test_pg_reconnect(void **state)
     assert_int_equal(state_of(st, ID_A), LJGAP_JOB_QUEUED);
     run = claim_ok(st, ID_A, 30);
     raw_ok(f->url, kill_all);
-    assert_int_equal(ljgap_jobstore_renew(st, ID_A, run, 0.5, 30, &cancel), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_renew(st, ID_A, run, 0.5, 30, &cancel), LJGAP_JOBSTORE_OK);
     raw_ok(f->url, kill_all);
-    assert_int_equal(ljgap_jobstore_finish(st, ID_A, run, LJGAP_JOB_DONE, "{}", 2), 0);
+    assert_int_equal(ljgap__jobstore_finish(st, ID_A, run, LJGAP_JOB_DONE, "{}", 2), 0);
     raw_ok(f->url, kill_all);
     create_ok(st, ID_C, "{}");
-    assert_int_equal(ljgap_jobstore_counts(st, &q, &r), 0);
+    assert_int_equal(ljgap__jobstore_counts(st, &q, &r), 0);
     assert_true(q == 2 && r == 0);
     assert_true(raw_long(f->url, "SELECT count(*) FROM pg_stat_activity WHERE application_name "
                                  "= 'ljgapd'") <= 2);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
     assert_int_equal(raw_long(f->url, "SELECT count(*) FROM pg_stat_activity WHERE "
                                       "application_name = 'ljgapd'"),
                      0); /* close closes them all */
@@ -430,15 +430,15 @@ static void test_pg_open_errors(void **state)
 {
     fixture *f = *state;
     char url[400];
-    ljgap_jobstore *st;
+    ljgap__jobstore *st;
     double t0;
 
     /* nobody listens there: refused at once, the password never shown */
     url_with(f, "s3cretpw", "127.0.0.1:1", NULL, url, sizeof url);
-    t0 = ljgap_jobstore_wallclock();
+    t0 = ljgap__jobstore_wallclock();
     open_fails(url, LJGAP_JOBSTORE_ERROR, "refused", "s3cretpw");
     open_fails(url, LJGAP_JOBSTORE_ERROR, "postgresql://ljgap@127.0.0.1:1/", NULL);
-    assert_true(ljgap_jobstore_wallclock() - t0 < 5);
+    assert_true(ljgap__jobstore_wallclock() - t0 < 5);
     /* the password as a query parameter, and percent-encoded */
     snprintf(url, sizeof url, "postgresql://ljgap@127.0.0.1:1/x?password=qwerty%%2112");
     open_fails(url, LJGAP_JOBSTORE_ERROR, "refused", "qwerty");
@@ -458,7 +458,7 @@ static void test_pg_open_errors(void **state)
     open_fails(url, LJGAP_JOBSTORE_ERROR, "needs a UTF8 database", NULL);
     /* and the good one still opens */
     st = open_pg(f->url, 0);
-    ljgap_jobstore_close(st);
+    ljgap__jobstore_close(st);
 }
 
 static void test_pg_foreign_schema(void **state)
@@ -468,13 +468,13 @@ static void test_pg_foreign_schema(void **state)
     open_fails(f->url, LJGAP_JOBSTORE_ERROR, "not an ljgapd job store", NULL);
     /* an empty schema ljgapd (made by an administrator, with its grants) is taken */
     raw_ok(f->url, "DROP TABLE ljgapd.notes");
-    ljgap_jobstore_close(open_pg(f->url, 0));
+    ljgap__jobstore_close(open_pg(f->url, 0));
 }
 
 static void test_pg_schema_too_new(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore_close(open_pg(f->url, 0));
+    ljgap__jobstore_close(open_pg(f->url, 0));
     raw_ok(f->url, "UPDATE ljgapd.schema_version SET version = 99");
     open_fails(f->url, LJGAP_JOBSTORE_ERROR, "schema version 99", NULL);
     raw_ok(f->url, "DELETE FROM ljgapd.schema_version");
@@ -485,7 +485,7 @@ static void test_pg_schema_too_new(void **state)
 
 static void test_pg_row(void **state)
 {
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     const char *val[LJGAP_PG_COLS] = {0};
     int len[LJGAP_PG_COLS] = {0};
     char *json;
@@ -508,14 +508,14 @@ static void test_pg_row(void **state)
         len[i] = good[i] ? (int)strlen(good[i]) : 0;
     }
     memset(&rec, 0, sizeof rec);
-    assert_int_equal(ljgap_jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
+    assert_int_equal(ljgap__jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
     assert_string_equal(rec.id, good[0]);
     assert_true(rec.state == LJGAP_JOB_RUNNING && rec.progress == 0.25 && rec.cancel == 1);
     assert_true(rec.created == 1700000000.5 && rec.finished == 0 && rec.now == 1700000002.25);
     assert_true(rec.run == 3 && rec.lost == 1 && rec.answer == NULL);
     assert_int_equal(rec.request_len, 4);
     assert_memory_equal(rec.request, "{}\0\xff", 4);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
 
     /* junk everywhere */
     val[LJGAP_PG_ID] = "0123456789abcdef0123456789abcdef0"; /* too long */
@@ -532,7 +532,7 @@ static void test_pg_row(void **state)
     val[LJGAP_PG_ANSWER] = "{\"a\":1}\0junk"; /* a length past a NUL */
     len[LJGAP_PG_ANSWER] = 12;
     memset(&rec, 0, sizeof rec);
-    assert_int_equal(ljgap_jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
+    assert_int_equal(ljgap__jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
     assert_string_equal(rec.id, "");
     assert_int_equal(rec.state, LJGAP_JOB_BAD);
     assert_true(rec.progress == 0 && isinf(rec.created) && isnan(rec.started));
@@ -541,21 +541,21 @@ static void test_pg_row(void **state)
     assert_string_equal(rec.request, "");
     assert_int_equal(rec.answer_len, 12); /* kept as read: the status check refuses it */
     rec.state = LJGAP_JOB_DONE;
-    assert_non_null(json = ljgap_job_status_json(&rec));
+    assert_non_null(json = ljgap__job_status_json(&rec));
     assert_non_null(strstr(json, "job-damaged"));
     free(json);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     val[LJGAP_PG_REQUEST] = "\\x7g";
     len[LJGAP_PG_REQUEST] = 4;
     memset(&rec, 0, sizeof rec);
-    assert_int_equal(ljgap_jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
+    assert_int_equal(ljgap__jobstore_pg_row(&rec, val, len, LJGAP_PG_COLS), 0);
     assert_int_equal(rec.request_len, 0);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     /* without the request column: no request */
     memset(&rec, 0, sizeof rec);
-    assert_int_equal(ljgap_jobstore_pg_row(&rec, val, len, LJGAP_PG_REQUEST), 0);
+    assert_int_equal(ljgap__jobstore_pg_row(&rec, val, len, LJGAP_PG_REQUEST), 0);
     assert_null(rec.request);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
 }
 
 int main(void)

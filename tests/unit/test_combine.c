@@ -296,16 +296,16 @@ typedef struct {
 static answer ask(const char *request)
 {
     char *s = strdup(request);
-    ljgap_reply rep;
+    ljgap__reply rep;
     answer a;
     assert_non_null(s);
     for (char *c = s; *c; c++)
         if (*c == '\'') *c = '"';
-    ljgap_handle("psd/combine", s, strlen(s), &rep);
+    ljgap__handle("psd/combine", s, strlen(s), &rep);
     a.status = rep.status;
     a.body = cJSON_Parse(rep.body);
     if (!a.body) fail_msg("not JSON: %s", rep.body);
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
     free(s);
     return a;
 }
@@ -452,7 +452,7 @@ static cJSON *psd_of_map(size_t n, double dx, int periodic, unsigned long seed)
     size_t N = periodic ? n : 2 * n, len = 0, cap = n * n * 26 + 200;
     double *h = malloc(N * N * sizeof *h);
     char *body = malloc(cap);
-    ljgap_reply rep;
+    ljgap__reply rep;
     cJSON *ans, *psd;
     assert_non_null(h);
     assert_non_null(body);
@@ -470,11 +470,11 @@ static cJSON *psd_of_map(size_t n, double dx, int periodic, unsigned long seed)
     len += (size_t)snprintf(body + len, cap - len, "]}}");
     assert_true(len < cap);
     free(h);
-    ljgap_handle("psd", body, len, &rep);
+    ljgap__handle("psd", body, len, &rep);
     free(body);
     assert_int_equal(rep.status, 200);
     ans = cJSON_Parse(rep.body);
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
     assert_non_null(ans);
     psd = cJSON_DetachItemFromObject(ans, "psd");
     cJSON_Delete(ans);
@@ -513,7 +513,7 @@ static double law_var(double a, double b)
 static void two_maps_through_psd(int periodic, unsigned long seed)
 {
     cJSON *req = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(req, "psds"), *ans, *psd;
-    ljgap_reply rep;
+    ljgap__reply rep;
     char *body;
     double worst_z = 0, worst_rel = 0, worst_win = 0;
     size_t used = 0, tight = 0;
@@ -532,11 +532,11 @@ static void two_maps_through_psd(int periodic, unsigned long seed)
     }
     body = cJSON_PrintUnformatted(req);
     cJSON_Delete(req);
-    ljgap_handle("psd/combine", body, strlen(body), &rep);
+    ljgap__handle("psd/combine", body, strlen(body), &rep);
     free(body);
     assert_int_equal(rep.status, 200);
     ans = cJSON_Parse(rep.body);
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
     psd = cJSON_GetObjectItem(ans, "psd");
     const cJSON *K = cJSON_GetObjectItem(psd, "k"), *PP = cJSON_GetObjectItem(psd, "P"),
                 *EE = cJSON_GetObjectItem(psd, "P_err");

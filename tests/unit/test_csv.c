@@ -1,7 +1,7 @@
 /* test_csv.c -- the CSV answers (server/api/csv.c) and content negotiation (server/api/accept.c).
  *
  * The CSV form must carry the JSON answer's numbers and nothing else: each answer is asked
- * for as JSON, then turned into CSV (ljgap_csv_reply, so the two share every byte of input),
+ * for as JSON, then turned into CSV (ljgap__csv_reply, so the two share every byte of input),
  * and the CSV is parsed back line by line: every comment "# PATH [UNIT] = VALUE ± ERR" names a
  * JSON path whose value (and error: error.PATH, or si.error.REST for si.REST) it must equal,
  * every column a JSON array, and every number in the JSON must have been met (no field left
@@ -207,9 +207,9 @@ static void check_comments(const csv_doc *d, const cJSON *ans)
 /* The CSV form of ans (a 200 answer of endpoint, given as JSON text). */
 static char *to_csv(const char *endpoint, const char *json)
 {
-    ljgap_reply r = {200, strdup(json), strlen(json), "application/json", 0};
+    ljgap__reply r = {200, strdup(json), strlen(json), "application/json", 0};
     char *s;
-    assert_int_equal(ljgap_csv_reply(endpoint, &r), 0);
+    assert_int_equal(ljgap__csv_reply(endpoint, &r), 0);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, LJGAP_CT_CSV);
     assert_int_equal(r.len, strlen(r.body));
@@ -219,17 +219,17 @@ static char *to_csv(const char *endpoint, const char *json)
 
 /* The handler with an Accept header. */
 static void handle_accept(const char *endpoint, const char *accept, const char *body, size_t len,
-                          ljgap_reply *r)
+                          ljgap__reply *r)
 {
-    ljgap_call call = {.accept = accept};
-    ljgap_handle_call(endpoint, body, len, &call, r);
+    ljgap__call call = {.accept = accept};
+    ljgap__handle_call(endpoint, body, len, &call, r);
 }
 
 /* Asks endpoint for request as JSON; returns the body (checked 200). */
 static char *ask_json(const char *endpoint, const char *request)
 {
-    ljgap_reply r;
-    ljgap_handle(endpoint, request, strlen(request), &r);
+    ljgap__reply r;
+    ljgap__handle(endpoint, request, strlen(request), &r);
     if (r.status != 200) fail_msg("%s: %d %s", endpoint, r.status, r.body);
     return r.body;
 }
@@ -239,7 +239,7 @@ static char *ask_json(const char *endpoint, const char *request)
  * its doubles exactly), the time in the comments may differ. */
 static void check_handler_csv(const char *endpoint, const char *request, const char *csv)
 {
-    ljgap_reply r;
+    ljgap__reply r;
     csv_doc a, b;
     handle_accept(endpoint, "text/csv", request, strlen(request), &r);
     assert_int_equal(r.status, 200);
@@ -262,7 +262,7 @@ static void check_handler_csv(const char *endpoint, const char *request, const c
     }
     csv_free(&a);
     csv_free(&b);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 static void test_traction(void **state)
@@ -432,19 +432,19 @@ static void test_simulation(void **state)
 {
     const char *rq = "{\"psd\":{\"kind\":\"power\",\"D\":2.2,\"k1\":1,\"k2\":4,\"m0\":0.05},"
                      "\"n\":16,\"realizations\":2,\"g_ave\":[2,3]}";
-    ljgap_reply r;
-    ljgap_sim_request *sr = ljgap_sim_request_parse(rq, strlen(rq), &r);
+    ljgap__reply r;
+    ljgap__sim_request *sr = ljgap__sim_request_parse(rq, strlen(rq), &r);
     cJSON *ans;
     char *csv;
     csv_doc d;
     (void)state;
     assert_non_null(sr);
-    ljgap_sim_request_run(sr, NULL, &r);
-    ljgap_sim_request_free(sr);
+    ljgap__sim_request_run(sr, NULL, &r);
+    ljgap__sim_request_free(sr);
     assert_int_equal(r.status, 200);
     ans = cJSON_Parse(r.body);
     csv = to_csv("simulations", r.body);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     d = csv_parse(csv);
     n_seen = 0;
     assert_string_equal(d.lines[d.header], "g_ave [eps],sigma [sigma0],sigma_err [sigma0],"
@@ -511,16 +511,16 @@ static void test_accept_pick(void **state)
     };
     (void)state;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        int got = ljgap_accept_pick(cases[i].accept, two, 2);
+        int got = ljgap__accept_pick(cases[i].accept, two, 2);
         if (got != cases[i].want)
             fail_msg("Accept \"%s\": %d, want %d", cases[i].accept ? cases[i].accept : "(null)",
                      got, cases[i].want);
     }
-    assert_int_equal(ljgap_accept_pick("text/csv", two, 1), -1); /* JSON only on offer */
-    assert_int_equal(ljgap_accept_pick("*/*", two, 1), 0);
+    assert_int_equal(ljgap__accept_pick("text/csv", two, 1), -1); /* JSON only on offer */
+    assert_int_equal(ljgap__accept_pick("*/*", two, 1), 0);
 }
 
-static const char *type_of(const ljgap_reply *r)
+static const char *type_of(const ljgap__reply *r)
 {
     static char t[80];
     cJSON *doc = cJSON_Parse(r->body);
@@ -535,37 +535,37 @@ static void test_handler_negotiates(void **state)
     const char *rq = "{\"psd\":" PSD "}";
     const char *bad = "{\"psd\":{\"kind\":\"power\",\"D\":2.5,\"k1\":0.3,\"m0\":0.5}}";
     const char *tr = "{\"psd\":" PSD ",\"g_ave\":[2,3]}";
-    ljgap_reply r;
+    ljgap__reply r;
     (void)state;
     /* adhesion has no CSV form: text/csv alone is 406, before the body is looked at */
     handle_accept("adhesion", "text/csv", "{", 1, &r);
     assert_int_equal(r.status, 406);
     assert_string_equal(r.content_type, "application/problem+json");
     assert_string_equal(type_of(&r), "/problems/not-acceptable");
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     handle_accept("adhesion", "text/csv, */*;q=0.1", rq, strlen(rq), &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, "application/json");
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     /* problems stay JSON whatever Accept says */
     handle_accept("traction", "text/csv", bad, strlen(bad), &r);
     assert_int_equal(r.status, 422);
     assert_string_equal(r.content_type, "application/problem+json");
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     handle_accept("traction", "image/png", tr, strlen(tr), &r);
     assert_int_equal(r.status, 406);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     handle_accept("traction", "*/*", tr, strlen(tr), &r);
     assert_string_equal(r.content_type, "application/json");
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     handle_accept("traction", "application/json;q=0.5, text/*", tr, strlen(tr), &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, LJGAP_CT_CSV);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     /* an unknown endpoint is 404 whatever Accept says */
     handle_accept("nope", "image/png", tr, strlen(tr), &r);
     assert_int_equal(r.status, 404);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 static void test_sim_status(void **state)
@@ -577,30 +577,30 @@ static void test_sim_status(void **state)
                        "\"sigma_out\":[0.1],\"residual\":[1e-9],\"jump\":[false],"
                        "\"m0_realized\":[0.05],\"m0\":0.05,\"error\":{\"sigma\":[0.002]},"
                        "\"meta\":{\"method\":\"numerical\",\"warnings\":[]}}}";
-    ljgap_reply r;
+    ljgap__reply r;
     (void)state;
-    ljgap_sim_status_answer(running, 200, NULL, &r);
+    ljgap__sim_status_answer(running, 200, NULL, &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.body, running);
     assert_string_equal(r.content_type, "application/json");
-    ljgap_reply_free(&r);
-    ljgap_sim_status_answer(running, 202, "text/csv, application/json;q=0.5", &r);
+    ljgap__reply_free(&r);
+    ljgap__sim_status_answer(running, 202, "text/csv, application/json;q=0.5", &r);
     assert_int_equal(r.status, 202);
     assert_string_equal(r.body, running);
-    ljgap_reply_free(&r);
-    ljgap_sim_status_answer(running, 200, "text/csv", &r);
+    ljgap__reply_free(&r);
+    ljgap__sim_status_answer(running, 200, "text/csv", &r);
     assert_int_equal(r.status, 406);
     assert_non_null(strstr(r.body, "the job is running"));
-    ljgap_reply_free(&r);
-    ljgap_sim_status_answer(done, 200, "text/csv", &r);
+    ljgap__reply_free(&r);
+    ljgap__sim_status_answer(done, 200, "text/csv", &r);
     assert_int_equal(r.status, 200);
     assert_string_equal(r.content_type, LJGAP_CT_CSV);
     assert_non_null(strstr(r.body, "\ng_ave [eps],sigma [sigma0],sigma_err [sigma0],"));
     assert_non_null(strstr(r.body, "\n2,0.1,0.002,0.01,0.1,1e-09,false\n"));
-    ljgap_reply_free(&r);
-    ljgap_sim_status_answer(done, 200, "application/xml", &r);
+    ljgap__reply_free(&r);
+    ljgap__sim_status_answer(done, 200, "application/xml", &r);
     assert_int_equal(r.status, 406);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 int main(void)

@@ -1,5 +1,5 @@
 /* test_files.c -- the instrument-file readers (server/files/) and POST /v1/psd with a file
- * (server/api/psd.c, ljgap_handle_file).
+ * (server/api/psd.c, ljgap__handle_file).
  *
  * Small files are written here from each format's documentation (independently of
  * tests/files/gen.py, which writes others for the Gwyddion cross-check): a NanoScope file of two
@@ -186,10 +186,10 @@ static buf gwy(double z[NY * NX], double mask[NY * NX])
 }
 
 /* Reads b (format NULL: detected) into m; the status. */
-static int read_buf(const buf *b, const char *format, const char *channel, ljgap_files_map *m,
-                    ljgap_files_err *e)
+static int read_buf(const buf *b, const char *format, const char *channel, ljgap__files_map *m,
+                    ljgap__files_err *e)
 {
-    return ljgap_files_read(b->b, b->n, format, channel, m, e);
+    return ljgap__files_read(b->b, b->n, format, channel, m, e);
 }
 
 /* Every prefix of b, from a buffer of exactly its length, is refused (bad or unknown). */
@@ -197,15 +197,15 @@ static void every_prefix_refused(const buf *b)
 {
     for (size_t n = 0; n < b->n; n++) {
         unsigned char *c = malloc(n ? n : 1);
-        ljgap_files_map m;
-        ljgap_files_err e;
+        ljgap__files_map m;
+        ljgap__files_err e;
         assert_non_null(c);
         memcpy(c, b->b, n);
-        int st = ljgap_files_read(c, n, NULL, NULL, &m, &e);
+        int st = ljgap__files_read(c, n, NULL, NULL, &m, &e);
         if (st != LJGAP_FILES_BAD && st != LJGAP_FILES_UNKNOWN)
             fail_msg("a prefix of %zu of %zu bytes gave status %d", n, b->n, st);
         assert_null(m.z);
-        ljgap_files_map_free(&m);
+        ljgap__files_map_free(&m);
         free(c);
     }
 }
@@ -214,8 +214,8 @@ static void nanoscope_read_exactly(void **state)
 {
     static int16_t raw[2][NY][NX];
     buf b = nanoscope(raw);
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     assert_int_equal(read_buf(&b, NULL, NULL, &m, &e), 0);
     assert_string_equal(m.format, "nanoscope");
     assert_int_equal(m.nx, NX);
@@ -230,12 +230,12 @@ static void nanoscope_read_exactly(void **state)
         for (int i = 0; i < NX; i++)
             assert_true(fabs(m.z[(NY - 1 - j) * NX + i] - raw[0][j][i] * 1e-4 * 20e-9) <=
                         1e-15 * fabs(raw[0][j][i] * 2e-12) + 1e-30);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     assert_int_equal(read_buf(&b, "nanoscope", "phase", &m, &e), 0);
     assert_string_equal(m.z_unit, "V");
     assert_int_equal(m.channel_index, 1);
     assert_true(fabs(m.z[NX * (NY - 1)] - raw[1][0][0] * 0.001) < 1e-12);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     every_prefix_refused(&b);
     free(b.b);
 }
@@ -248,15 +248,15 @@ static int gsf_hole(size_t i, size_t j)
 static void gsf_read_exactly(void **state)
 {
     buf b = gsf(NX, NY, gsf_hole);
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     assert_int_equal(read_buf(&b, NULL, NULL, &m, &e), 0);
     assert_string_equal(m.format, "gsf");
     assert_int_equal(m.missing, 1);
     assert_true(isnan(m.z[5 * NX + 3]));
     assert_true(m.z[5 * NX + 4] == (double)(float)height(4, 5));
     assert_true(fabs(m.size_x - NX * 1e-8) < 1e-20);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     every_prefix_refused(&b);
     free(b.b);
 }
@@ -265,8 +265,8 @@ static void gwy_read_exactly(void **state)
 {
     static double z[NY * NX], mask[NY * NX];
     buf b = gwy(z, mask);
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     assert_int_equal(read_buf(&b, NULL, NULL, &m, &e), 0);
     assert_string_equal(m.format, "gwy");
     /* the channels in the order of their numbers, the height by its title */
@@ -276,14 +276,14 @@ static void gwy_read_exactly(void **state)
     assert_int_equal(m.missing, 6);
     for (int k = 0; k < NX * NY; k++)
         assert_true(mask[k] > 0.5 ? isnan(m.z[k]) : m.z[k] == z[k]);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     assert_int_equal(read_buf(&b, NULL, "Error", &m, &e), 0);
     assert_int_equal(m.missing, 0);
     assert_string_equal(m.z_unit, "V");
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     assert_int_equal(read_buf(&b, NULL, "7", &m, &e), LJGAP_FILES_CHANNEL);
     assert_non_null(strstr(e.msg, "0 \"Height\", 1 \"Error\""));
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     every_prefix_refused(&b);
     free(b.b);
 }
@@ -291,8 +291,8 @@ static void gwy_read_exactly(void **state)
 static void xyz_grid_found(void **state)
 {
     buf b = {0};
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     putf(&b, "# a header\nX, Y, Z\n");
     /* columns in reverse order, a missing point at (2, 1), spacing 0.5 um by 0.25 um */
     for (int j = 4; j >= 0; j--)
@@ -309,7 +309,7 @@ static void xyz_grid_found(void **state)
     assert_true(isnan(m.z[1 * 6 + 2]));
     assert_true(m.z[4 * 6 + 5] == height(5, 4));
     assert_true(fabs(m.size_x - 3e-6) < 1e-15 && fabs(m.size_y - 1.25e-6) < 1e-15);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     free(b.b);
     /* coordinates rounded by the export (a spacing of 1/3 um written with 3 decimals) */
     b = (buf){0};
@@ -320,7 +320,7 @@ static void xyz_grid_found(void **state)
     assert_int_equal(m.nx, 4);
     assert_int_equal(m.ny, 4);
     assert_int_equal(m.missing, 0);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
     free(b.b);
     /* a point cloud is no grid; a point given twice is an error */
     b = (buf){0};
@@ -337,29 +337,29 @@ static void xyz_grid_found(void **state)
 
 static void registry_and_detection(void **state)
 {
-    const ljgap_files_format *const *f = ljgap_files_formats();
-    ljgap_files_map m;
-    ljgap_files_err e;
+    const ljgap__files_format *const *f = ljgap__files_formats();
+    ljgap__files_map m;
+    ljgap__files_err e;
     int n = 0;
     for (; f[n]; n++) {
         for (int k = 0; k < n; k++)
             assert_true(strcmp(f[k]->name, f[n]->name) != 0);
-        assert_ptr_equal(ljgap_files_find(f[n]->name), f[n]);
+        assert_ptr_equal(ljgap__files_find(f[n]->name), f[n]);
     }
     assert_true(n >= 4);
     assert_string_equal(f[n - 1]->name, "xyz"); /* the loosest last */
     static const unsigned char png[] = "\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
-    assert_int_equal(ljgap_files_read(png, sizeof png, NULL, NULL, &m, &e), LJGAP_FILES_UNKNOWN);
+    assert_int_equal(ljgap__files_read(png, sizeof png, NULL, NULL, &m, &e), LJGAP_FILES_UNKNOWN);
     assert_non_null(strstr(e.msg, "nanoscope"));
-    assert_int_equal(ljgap_files_read(png, sizeof png, "tiff-of-nothing", NULL, &m, &e),
+    assert_int_equal(ljgap__files_read(png, sizeof png, "tiff-of-nothing", NULL, &m, &e),
                      LJGAP_FILES_UNKNOWN);
-    assert_int_equal(ljgap_files_read(png, sizeof png, "GWY", NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_read(png, sizeof png, "GWY", NULL, &m, &e), LJGAP_FILES_BAD);
     assert_string_equal(e.format, "gwy");
     assert_int_equal(e.offset, 0);
-    assert_int_equal(ljgap_files_read(NULL, 0, NULL, NULL, &m, &e), LJGAP_FILES_UNKNOWN);
-    ljgap_files_map_free(&m);
-    ljgap_files_map_free(NULL);
-    assert_true(ljgap_files_unit_scale("nm") == 1e-9 && ljgap_files_unit_scale("V") == 0);
+    assert_int_equal(ljgap__files_read(NULL, 0, NULL, NULL, &m, &e), LJGAP_FILES_UNKNOWN);
+    ljgap__files_map_free(&m);
+    ljgap__files_map_free(NULL);
+    assert_true(ljgap__files_unit_scale("nm") == 1e-9 && ljgap__files_unit_scale("V") == 0);
 }
 
 /* the hole: rows 20 to 25 entirely (a band), and one point at (50, 60) */
@@ -370,15 +370,15 @@ static int band_hole(size_t i, size_t j)
 
 static void largest_rectangle(void **state)
 {
-    ljgap_files_map m = {0};
+    ljgap__files_map m = {0};
     size_t x0, y0, w, h;
     m.nx = 64, m.ny = 64;
     m.z = malloc(64 * 64 * sizeof *m.z);
     for (size_t j = 0; j < 64; j++)
         for (size_t i = 0; i < 64; i++)
             m.z[j * 64 + i] = band_hole(i, j) ? NAN : 1;
-    assert_int_equal(ljgap_files_count_missing(&m), 6 * 64 + 1);
-    assert_int_equal(ljgap_files_largest_rect(&m, &x0, &y0, &w, &h), 0);
+    assert_int_equal(ljgap__files_count_missing(&m), 6 * 64 + 1);
+    assert_int_equal(ljgap__files_largest_rect(&m, &x0, &y0, &w, &h), 0);
     /* below the band: rows 26-63 (38) of 64 = 2432; beside (50, 60): rows 26-63 of 50 columns
      * (1900), or rows 26-59 (34) of 64 = 2176; above the band 20 x 64 = 1280 */
     assert_int_equal(x0, 0);
@@ -387,12 +387,12 @@ static void largest_rectangle(void **state)
     assert_int_equal(h, 34);
     for (size_t k = 0; k < 64 * 64; k++)
         m.z[k] = NAN;
-    assert_int_equal(ljgap_files_largest_rect(&m, &x0, &y0, &w, &h), 0);
+    assert_int_equal(ljgap__files_largest_rect(&m, &x0, &y0, &w, &h), 0);
     assert_int_equal(w * h, 0);
-    ljgap_files_map_free(&m);
+    ljgap__files_map_free(&m);
 }
 
-static cJSON *answer(ljgap_reply *r, int status)
+static cJSON *answer(ljgap__reply *r, int status)
 {
     cJSON *a = cJSON_ParseWithLength(r->body, r->len);
     if (r->status != status) fail_msg("status %d, not %d: %.400s", r->status, status, r->body);
@@ -404,9 +404,9 @@ static void psd_of_a_map_with_a_hole(void **state)
 {
     const size_t N = 64;
     buf b = gsf(N, N, band_hole), t = {0};
-    ljgap_reply rf, rt;
-    ljgap_param q[] = {{"detrend", "plane"}};
-    ljgap_handle_file("psd", q, 1, b.b, b.n, NULL, &rf);
+    ljgap__reply rf, rt;
+    ljgap__param q[] = {{"detrend", "plane"}};
+    ljgap__handle_file("psd", q, 1, b.b, b.n, NULL, &rf);
     cJSON *a = answer(&rf, 200);
     cJSON *s = cJSON_GetObjectItem(a, "source"), *miss = cJSON_GetObjectItem(s, "missing"),
           *used = cJSON_GetObjectItem(miss, "used");
@@ -422,8 +422,8 @@ static void psd_of_a_map_with_a_hole(void **state)
             putf(&t, "%.17g ", (double)(float)height(i, j));
         putf(&t, "\n");
     }
-    ljgap_param qt[] = {{"detrend", "plane"}, {"dx", "1e-8"}};
-    ljgap_handle_text("psd", qt, 2, (const char *)t.b, t.n, NULL, &rt);
+    ljgap__param qt[] = {{"detrend", "plane"}, {"dx", "1e-8"}};
+    ljgap__handle_text("psd", qt, 2, (const char *)t.b, t.n, NULL, &rt);
     cJSON *at = answer(&rt, 200);
     const char *same[] = {"k", "P", "modes", "h_rms", "rms_slope", "fit", "reliable", "psd"};
     for (size_t k = 0; k < sizeof same / sizeof *same; k++) {
@@ -433,44 +433,44 @@ static void psd_of_a_map_with_a_hole(void **state)
         free(x), free(y);
     }
     cJSON_Delete(a), cJSON_Delete(at);
-    ljgap_reply_free(&rf), ljgap_reply_free(&rt);
+    ljgap__reply_free(&rf), ljgap__reply_free(&rt);
     free(b.b), free(t.b);
 }
 
 static void file_problems(void **state)
 {
     buf b = gsf(32, 32, NULL);
-    ljgap_reply r;
+    ljgap__reply r;
     cJSON *a;
-    ljgap_param dx[] = {{"dx", "1e-9"}}, ch[] = {{"channel", "Phase"}}, bad[] = {{"bogus", "1"}},
+    ljgap__param dx[] = {{"dx", "1e-9"}}, ch[] = {{"channel", "Phase"}}, bad[] = {{"bogus", "1"}},
                 fm[] = {{"format", "pdf"}};
-    ljgap_handle_file("psd", NULL, 0, (const unsigned char *)"GIF89a....", 10, NULL, &r);
+    ljgap__handle_file("psd", NULL, 0, (const unsigned char *)"GIF89a....", 10, NULL, &r);
     a = answer(&r, 415);
     assert_non_null(strstr(cJSON_GetObjectItem(a, "detail")->valuestring, "gsf (.gsf)"));
-    cJSON_Delete(a), ljgap_reply_free(&r);
-    ljgap_handle_file("psd", fm, 1, b.b, b.n, NULL, &r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
+    ljgap__handle_file("psd", fm, 1, b.b, b.n, NULL, &r);
     a = answer(&r, 422);
     assert_non_null(strstr(r.body, "\"pointer\":\"/format\""));
-    cJSON_Delete(a), ljgap_reply_free(&r);
-    ljgap_handle_file("psd", NULL, 0, b.b, b.n - 7, NULL, &r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
+    ljgap__handle_file("psd", NULL, 0, b.b, b.n - 7, NULL, &r);
     a = answer(&r, 422);
     assert_string_equal(cJSON_GetObjectItem(a, "type")->valuestring, "/problems/bad-file");
     assert_string_equal(cJSON_GetObjectItem(a, "format")->valuestring, "gsf");
     assert_int_equal(cJSON_GetObjectItem(a, "offset")->valuedouble, (double)(b.n - 7));
-    cJSON_Delete(a), ljgap_reply_free(&r);
-    ljgap_handle_file("psd", dx, 1, b.b, b.n, NULL, &r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
+    ljgap__handle_file("psd", dx, 1, b.b, b.n, NULL, &r);
     a = answer(&r, 422);
     assert_non_null(strstr(r.body, "\"pointer\":\"/topography/dx\""));
-    cJSON_Delete(a), ljgap_reply_free(&r);
-    ljgap_handle_file("psd", ch, 1, b.b, b.n, NULL, &r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
+    ljgap__handle_file("psd", ch, 1, b.b, b.n, NULL, &r);
     a = answer(&r, 422);
     assert_non_null(strstr(r.body, "\"pointer\":\"/channel\""));
-    cJSON_Delete(a), ljgap_reply_free(&r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
     /* an unknown query parameter is refused whatever the file */
-    ljgap_handle_file("psd", bad, 1, (const unsigned char *)"x", 1, NULL, &r);
+    ljgap__handle_file("psd", bad, 1, (const unsigned char *)"x", 1, NULL, &r);
     a = answer(&r, 422);
     assert_non_null(strstr(r.body, "\"pointer\":\"/bogus\""));
-    cJSON_Delete(a), ljgap_reply_free(&r);
+    cJSON_Delete(a), ljgap__reply_free(&r);
     free(b.b);
 }
 

@@ -94,7 +94,7 @@ static void poketext(wbuf *w, size_t at, const char *s)
     memcpy(w->p + at, s, strlen(s));
 }
 
-static void map_release(ljgap_files_map *m)
+static void map_release(ljgap__files_map *m)
 {
     free(m->z);
     m->z = NULL;
@@ -110,14 +110,14 @@ static int32_t rnd(int32_t lim)
 
 /* ---- the robustness sweeps every format goes through ---- */
 
-static void sweep(const ljgap_files_format *f, const wbuf *w)
+static void sweep(const ljgap__files_format *f, const wbuf *w)
 {
     /* every prefix: bad, named, located */
     for (size_t len = 0; len < w->n; len++) {
         unsigned char *cut = malloc(len ? len : 1); /* exact size: ASan sees any overread */
         memcpy(cut, w->p, len);
-        ljgap_files_map m;
-        ljgap_files_err e;
+        ljgap__files_map m;
+        ljgap__files_err e;
         memset(&e, 0, sizeof e);
         int rc = f->read(cut, len, NULL, &m, &e);
         if (rc != LJGAP_FILES_BAD)
@@ -135,8 +135,8 @@ static void sweep(const ljgap_files_format *f, const wbuf *w)
     for (size_t at = 0; at < w->n; at++) {
         memcpy(buf, w->p, w->n);
         buf[at] ^= 0xff;
-        ljgap_files_map m;
-        ljgap_files_err e;
+        ljgap__files_map m;
+        ljgap__files_err e;
         int rc = f->read(buf, w->n, NULL, &m, &e);
         if (rc == 0) {
             size_t nan = 0;
@@ -153,20 +153,20 @@ static void sweep(const ljgap_files_format *f, const wbuf *w)
     free(buf);
 }
 
-static int read_ok(const ljgap_files_format *f, const wbuf *w, const char *channel,
-                   ljgap_files_map *m)
+static int read_ok(const ljgap__files_format *f, const wbuf *w, const char *channel,
+                   ljgap__files_map *m)
 {
-    ljgap_files_err e;
+    ljgap__files_err e;
     memset(&e, 0, sizeof e);
     int rc = f->read(w->p, w->n, channel, m, &e);
     if (rc) print_error("%s: %d at %ld [%s]: %s\n", f->name, rc, e.offset, e.member, e.msg);
     return rc;
 }
 
-static int read_err(const ljgap_files_format *f, const wbuf *w, const char *channel,
-                    ljgap_files_err *e)
+static int read_err(const ljgap__files_format *f, const wbuf *w, const char *channel,
+                    ljgap__files_err *e)
 {
-    ljgap_files_map m;
+    ljgap__files_map m;
     memset(e, 0, sizeof *e);
     int rc = f->read(w->p, w->n, channel, &m, e);
     map_release(&m);
@@ -234,9 +234,9 @@ static void check_sur(const sur_spec *s, double fx, double fz)
     wbuf w = {0};
     int32_t *vals = malloc(sizeof *vals * (size_t)s->nx * s->ny);
     sur_object(&w, s, 1, vals);
-    assert_true(ljgap_files_sur.probe(w.p, w.n));
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_sur, &w, NULL, &m), 0);
+    assert_true(ljgap__files_sur.probe(w.p, w.n));
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_sur, &w, NULL, &m), 0);
     assert_string_equal(m.format, "sur");
     assert_int_equal(m.nx, s->nx), assert_int_equal(m.ny, s->ny);
     assert_close(m.size_x, (double)s->dx * fx * s->nx, 1e-15 * m.size_x);
@@ -257,7 +257,7 @@ static void check_sur(const sur_spec *s, double fx, double fz)
     assert_string_equal(m.instrument, "interferometer");
     assert_string_equal(m.channel, s->name);
     map_release(&m);
-    sweep(&ljgap_files_sur, &w);
+    sweep(&ljgap__files_sur, &w);
     free(vals), free(w.p);
 }
 
@@ -281,25 +281,25 @@ static void test_sur_objects_and_errors(void **state)
     wbuf w = {0};
     sur_object(&w, &a, 2, va);
     sur_object(&w, &b, 2, vb);
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_sur, &w, "second", &m), 0);
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_sur, &w, "second", &m), 0);
     assert_int_equal(m.n_channels, 2);
     assert_string_equal(m.channels[0], "first");
     assert_int_equal(m.channel_index, 1);
     assert_int_equal(m.nx, 3), assert_int_equal(m.ny, 7);
     assert_close(m.z[6], vb[6] * 1e-6, 1e-20);
     map_release(&m);
-    assert_int_equal(read_ok(&ljgap_files_sur, &w, "0", &m), 0);
+    assert_int_equal(read_ok(&ljgap__files_sur, &w, "0", &m), 0);
     assert_int_equal(m.nx, 5);
     assert_close(m.z[6], va[6] * 1e-9, 1e-24);
     map_release(&m);
-    ljgap_files_err e;
-    assert_int_equal(read_err(&ljgap_files_sur, &w, "third", &e), LJGAP_FILES_CHANNEL);
-    assert_int_equal(read_err(&ljgap_files_sur, &w, "2", &e), LJGAP_FILES_CHANNEL);
+    ljgap__files_err e;
+    assert_int_equal(read_err(&ljgap__files_sur, &w, "third", &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(read_err(&ljgap__files_sur, &w, "2", &e), LJGAP_FILES_CHANNEL);
     /* inversion (290): 1 negates z, 2 also mirrors x, 3 also mirrors y */
     for (unsigned inv = 1; inv <= 3; inv++) {
         poke(&w, 290, inv, 2, 0);
-        assert_int_equal(read_ok(&ljgap_files_sur, &w, NULL, &m), 0);
+        assert_int_equal(read_ok(&ljgap__files_sur, &w, NULL, &m), 0);
         for (int j = 0; j < 4; j++)
             for (int i = 0; i < 5; i++) {
                 int si = inv == 2 ? 4 - i : i, sj = inv == 3 ? 3 - j : j;
@@ -308,11 +308,11 @@ static void test_sur_objects_and_errors(void **state)
         map_release(&m);
     }
     poke(&w, 98, 8, 2, 0); /* 8 bits a point */
-    assert_int_equal(read_err(&ljgap_files_sur, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_int_equal(read_err(&ljgap__files_sur, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 98);
     poke(&w, 98, 16, 2, 0);
     poke(&w, 116, 21, 4, 0); /* total points != nx * ny */
-    assert_int_equal(read_err(&ljgap_files_sur, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_int_equal(read_err(&ljgap__files_sur, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 116);
     free(w.p);
 }
@@ -352,9 +352,9 @@ static void check_mp(int fmt, int res, int buckets, int sign)
     uint16_t inten[63];
     wbuf w = {0};
     mp_file(&w, fmt, nx, ny, res, buckets, sign, phase, inten);
-    assert_true(ljgap_files_metropro.probe(w.p, w.n));
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_metropro, &w, NULL, &m), 0);
+    assert_true(ljgap__files_metropro.probe(w.p, w.n));
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_metropro, &w, NULL, &m), 0);
     double R = res == 0 ? 4096 : res == 1 ? 32768 : 131072;
     double q = (double)0.5f * (double)1.25f * (double)632.8e-9f / R * (sign ? -1 : 1);
     size_t miss = 0;
@@ -372,7 +372,7 @@ static void check_mp(int fmt, int res, int buckets, int sign)
     assert_int_equal(m.n_channels, 1 + buckets);
     map_release(&m);
     if (buckets) {
-        assert_int_equal(read_ok(&ljgap_files_metropro, &w, "Intensity", &m), 0);
+        assert_int_equal(read_ok(&ljgap__files_metropro, &w, "Intensity", &m), 0);
         for (size_t k = 0; k < 63; k++)
             if (inten[k] >= 65412)
                 assert_true(isnan(m.z[k]));
@@ -381,7 +381,7 @@ static void check_mp(int fmt, int res, int buckets, int sign)
         assert_int_equal(m.missing, 1);
         map_release(&m);
     }
-    if (fmt != 3) sweep(&ljgap_files_metropro, &w); /* format 3: the same code, 4 KiB longer */
+    if (fmt != 3) sweep(&ljgap__files_metropro, &w); /* format 3: the same code, 4 KiB longer */
     free(w.p);
 }
 
@@ -394,12 +394,12 @@ static void test_metropro(void **state)
     uint16_t inten[4];
     wbuf w = {0};
     mp_file(&w, 2, 2, 2, 3, 0, 0, phase, inten);
-    ljgap_files_err e;
-    assert_int_equal(read_err(&ljgap_files_metropro, &w, NULL, &e), LJGAP_FILES_BAD);
+    ljgap__files_err e;
+    assert_int_equal(read_err(&ljgap__files_metropro, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 218); /* phase resolution 3 */
-    assert_int_equal(read_err(&ljgap_files_metropro, &w, "Intensity", &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(read_err(&ljgap__files_metropro, &w, "Intensity", &e), LJGAP_FILES_CHANNEL);
     poke(&w, 6, 4096, 4, 1); /* format 2 with a 4096-byte header */
-    assert_int_equal(read_err(&ljgap_files_metropro, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_int_equal(read_err(&ljgap__files_metropro, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 4);
     free(w.p);
 }
@@ -489,9 +489,9 @@ static void test_x3p(void **state)
                      {"md5checksum.hex", (const unsigned char *)"x\n", 2, 0}};
     wbuf w = {0};
     zip_write(&w, mem, 3);
-    assert_true(ljgap_files_x3p.probe(w.p, w.n));
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_x3p, &w, NULL, &m), 0);
+    assert_true(ljgap__files_x3p.probe(w.p, w.n));
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_x3p, &w, NULL, &m), 0);
     assert_int_equal(m.nx, NX), assert_int_equal(m.ny, NY);
     assert_close(m.size_x, 1.25e-7 * NX, 1e-22);
     assert_close(m.size_y, 2.5e-7 * NY, 1e-22);
@@ -506,14 +506,14 @@ static void test_x3p(void **state)
     assert_string_equal(m.acquired, "2021-06-07T08:09:10+02:00");
     assert_int_equal(m.n_channels, 2);
     map_release(&m);
-    assert_int_equal(read_ok(&ljgap_files_x3p, &w, "1", &m), 0); /* the second layer */
+    assert_int_equal(read_ok(&ljgap__files_x3p, &w, "1", &m), 0); /* the second layer */
     for (int k = 0; k < N; k++)
         assert_true(isnan(d[N + k]) ? isnan(m.z[k]) : m.z[k] == d[N + k]);
     map_release(&m);
-    sweep(&ljgap_files_x3p, &w);
-    ljgap_files_err e;
+    sweep(&ljgap__files_x3p, &w);
+    ljgap__files_err e;
     w.p[30 + 8 + strlen(xml) + 30 + 16 + 5] ^= 1; /* in data.bin: its CRC no longer matches */
-    int rc = read_err(&ljgap_files_x3p, &w, NULL, &e);
+    int rc = read_err(&ljgap__files_x3p, &w, NULL, &e);
     assert_int_equal(rc, LJGAP_FILES_BAD);
     assert_string_equal(e.member, "bindata/data.bin");
     assert_non_null(strstr(e.msg, "CRC"));
@@ -536,7 +536,7 @@ static void test_x3p(void **state)
                       {"bindata/data.bin", bin.p, bin.n, 1},
                       {"bindata/valid.bin", valid, sizeof valid, 0}};
     zip_write(&w, mem2, 3);
-    assert_int_equal(read_ok(&ljgap_files_x3p, &w, NULL, &m), 0);
+    assert_int_equal(read_ok(&ljgap__files_x3p, &w, NULL, &m), 0);
     for (int k = 0; k < N; k++)
         if (k % 6 == 0)
             assert_true(isnan(m.z[k]));
@@ -544,12 +544,12 @@ static void test_x3p(void **state)
             assert_close(m.z[k], 2e-8 + 1e-9 * v[k], 1e-22);
     assert_int_equal(m.missing, (N + 5) / 6);
     map_release(&m);
-    sweep(&ljgap_files_x3p, &w);
+    sweep(&ljgap__files_x3p, &w);
     /* no main.xml: the member is named */
     mem2[0].name = "other.xml";
     w.n = 0;
     zip_write(&w, mem2, 3);
-    assert_int_equal(read_err(&ljgap_files_x3p, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_int_equal(read_err(&ljgap__files_x3p, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_string_equal(e.member, "main.xml");
     free(w.p), free(xml), free(bin.p);
 }
@@ -563,14 +563,14 @@ static void test_x3p_profile_list_toobig(void **state)
     member mem[1] = {{"main.xml", (unsigned char *)xml, strlen(xml), 0}};
     wbuf w = {0};
     zip_write(&w, mem, 1);
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_x3p, &w, NULL, &m), 0);
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_x3p, &w, NULL, &m), 0);
     assert_int_equal(m.nx, 4), assert_int_equal(m.ny, 1);
     assert_true(m.z[0] == 1e-9 && isnan(m.z[1]) && m.z[2] == -2.5e-9 && m.z[3] == 4e-9);
     assert_int_equal(m.missing, 1);
     assert_close(m.size_x, 5e-7, 1e-22);
     map_release(&m);
-    sweep(&ljgap_files_x3p, &w);
+    sweep(&ljgap__files_x3p, &w);
     free(xml);
     /* 5000 x 5000 points: over the limit */
     xml = x3p_xml("SUR", 'D', 5000, 5000, 1, 1, 0,
@@ -578,8 +578,8 @@ static void test_x3p_profile_list_toobig(void **state)
     member big[1] = {{"main.xml", (unsigned char *)xml, strlen(xml), 0}};
     w.n = 0;
     zip_write(&w, big, 1);
-    ljgap_files_err e;
-    assert_int_equal(read_err(&ljgap_files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
+    ljgap__files_err e;
+    assert_int_equal(read_err(&ljgap__files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
     free(xml);
     /* a deflated member far larger than the grid needs (a zip bomb) is not inflated */
     xml = x3p_xml("SUR", 'D', 2, 2, 1, 1, 0,
@@ -590,7 +590,7 @@ static void test_x3p_profile_list_toobig(void **state)
     w.n = 0;
     zip_write(&w, bomb, 2);
     assert_true(w.n < 2000);
-    assert_int_equal(read_err(&ljgap_files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
+    assert_int_equal(read_err(&ljgap__files_x3p, &w, NULL, &e), LJGAP_FILES_TOOBIG);
     assert_string_equal(e.member, "bindata/data.bin");
     free(zeros_), free(xml), free(w.p);
 }
@@ -697,9 +697,9 @@ static void check_nc(int version, int nx, int ny, int yx, int with_mask, int per
     if (with_mask) mask[7] = 1, mask[8] = 1;
     wbuf w = {0};
     nc_file(&w, version, nx, ny, yx, h, with_mask ? mask : NULL, periodic);
-    assert_true(ljgap_files_netcdf.probe(w.p, w.n));
-    ljgap_files_map m;
-    assert_int_equal(read_ok(&ljgap_files_netcdf, &w, NULL, &m), 0);
+    assert_true(ljgap__files_netcdf.probe(w.p, w.n));
+    ljgap__files_map m;
+    assert_int_equal(read_ok(&ljgap__files_netcdf, &w, NULL, &m), 0);
     assert_int_equal(m.nx, nx), assert_int_equal(m.ny, rows);
     size_t miss = 0;
     for (int j = 0; j < rows; j++)
@@ -719,7 +719,7 @@ static void check_nc(int version, int nx, int ny, int yx, int with_mask, int per
     assert_string_equal(m.instrument, "AFM \"X");
     assert_close(m.tip_radius, 20e-9, 1e-22);
     map_release(&m);
-    sweep(&ljgap_files_netcdf, &w);
+    sweep(&ljgap__files_netcdf, &w);
     free(w.p);
 }
 
@@ -728,19 +728,19 @@ static void test_netcdf(void **state)
     check_nc(1, 6, 5, 0, 0, 1);
     check_nc(2, 6, 5, 1, 1, 0);
     check_nc(2, 9, 0, 0, 1, 0);
-    ljgap_files_err e;
+    ljgap__files_err e;
     wbuf w = {0};
     put(&w, "\x89HDF\r\n\x1a\n", 8), zeros(&w, 64);
-    assert_true(ljgap_files_netcdf.probe(w.p, w.n));
-    assert_int_equal(read_err(&ljgap_files_netcdf, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_true(ljgap__files_netcdf.probe(w.p, w.n));
+    assert_int_equal(read_err(&ljgap__files_netcdf, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_non_null(strstr(e.msg, "NETCDF3"));
     free(w.p);
     w = (wbuf){0};
     double h[30] = {0};
     nc_file(&w, 1, 6, 5, 0, h, NULL, 0);
-    assert_int_equal(read_err(&ljgap_files_netcdf, &w, "elevation", &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(read_err(&ljgap__files_netcdf, &w, "elevation", &e), LJGAP_FILES_CHANNEL);
     memcpy(memmem(w.p, w.n, "heights", 7), "Heights", 7); /* no variable heights */
-    assert_int_equal(read_err(&ljgap_files_netcdf, &w, NULL, &e), LJGAP_FILES_BAD);
+    assert_int_equal(read_err(&ljgap__files_netcdf, &w, NULL, &e), LJGAP_FILES_BAD);
     assert_non_null(strstr(e.msg, "heights"));
     free(w.p);
 }
@@ -749,8 +749,8 @@ static void test_netcdf(void **state)
 
 static void test_probes(void **state)
 {
-    const ljgap_files_format *f[4] = {&ljgap_files_x3p, &ljgap_files_sur, &ljgap_files_metropro,
-                                      &ljgap_files_netcdf};
+    const ljgap__files_format *f[4] = {&ljgap__files_x3p, &ljgap__files_sur, &ljgap__files_metropro,
+                                      &ljgap__files_netcdf};
     wbuf w[4] = {{0}};
     int32_t vals[64];
     uint16_t inten[64];

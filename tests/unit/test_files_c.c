@@ -34,10 +34,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const ljgap_files_format *const readers[] = {&ljgap_files_ibw, &ljgap_files_park_tiff,
-                                                    &ljgap_files_plu};
+static const ljgap__files_format *const readers[] = {&ljgap__files_ibw, &ljgap__files_park_tiff,
+                                                    &ljgap__files_plu};
 
-static void map_free(ljgap_files_map *m)
+static void map_free(ljgap__files_map *m)
 {
     free(m->z);
     m->z = NULL;
@@ -48,7 +48,7 @@ static const char *const asylum_labels[] = {"AmplitudeRetrace", "HeightRetrace",
     "ScanSize: 2e-07\rMicroscopeModel: Cypher S\rDate: 2024-05-06\rTime: 1:02:03 PM\r"             \
     "TipRadius: 7e-09\rPhaseUnit: deg\r"
 
-static void check_igor_points(const ljgap_files_map *m, size_t c, double q)
+static void check_igor_points(const ljgap__files_map *m, size_t c, double q)
 {
     for (size_t j = 0; j < m->ny; j++)
         for (size_t i = 0; i < m->nx; i++)
@@ -69,10 +69,10 @@ static void test_ibw_asylum(void **state)
                    .note = ASYLUM_NOTE,
                    .labels = asylum_labels};
     wbuf b = igor5(&s);
-    ljgap_files_map m;
-    ljgap_files_err e;
-    assert_true(ljgap_files_ibw.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
+    ljgap__files_map m;
+    ljgap__files_err e;
+    assert_true(ljgap__files_ibw.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
     assert_string_equal(m.format, "ibw");
     assert_int_equal(m.n_channels, 3);
     assert_string_equal(m.channels[0], "AmplitudeRetrace");
@@ -90,18 +90,18 @@ static void test_ibw_asylum(void **state)
     assert_true(m.tip_radius == 7e-9);
     map_free(&m);
     /* by index and by title; Phase keeps its own unit, unconverted */
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "2", &m, &e), 0);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "2", &m, &e), 0);
     assert_string_equal(m.channel, "PhaseRetrace");
     assert_string_equal(m.z_unit, "deg");
     check_igor_points(&m, 2, 1.0);
     map_free(&m);
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "amplituderetrace", &m, &e), 0);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "amplituderetrace", &m, &e), 0);
     assert_int_equal(m.channel_index, 0);
     check_igor_points(&m, 0, 1.0);
     map_free(&m);
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "3", &m, &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "3", &m, &e), LJGAP_FILES_CHANNEL);
     assert_null(m.z);
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "Friction", &m, &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "Friction", &m, &e), LJGAP_FILES_CHANNEL);
     assert_null(m.z);
     assert_non_null(strstr(e.msg, "Friction"));
     free(b.p);
@@ -130,8 +130,8 @@ static double as_stored(double v, unsigned type)
 static void test_ibw_types(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     /* big endian doubles, a 2-D wave (one channel, titled by the wave's name), nm heights
      * given as extended units, µm steps */
     igor_spec s = {.be = 1,
@@ -144,8 +144,8 @@ static void test_ibw_types(void **state)
                    .dim_unit = "um",
                    .data_eunits = "nm"};
     wbuf b = igor5(&s);
-    assert_true(ljgap_files_ibw.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_true(ljgap__files_ibw.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
     assert_int_equal(m.n_channels, 1);
     assert_string_equal(m.channel, "wave0");
     assert_string_equal(m.z_unit, "nm");
@@ -167,7 +167,7 @@ static void test_ibw_types(void **state)
                     .dim_unit = "\xb5m",
                     .labels = latin1};
     b = igor5(&sl);
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, "h\xc3\xb6he", &m, &e), 0);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "h\xc3\xb6he", &m, &e), 0);
     assert_string_equal(m.channel, "H\xc3\xb6he");
     assert_true(fabs(m.size_x - 8e-6) < 1e-18);
     map_free(&m);
@@ -186,7 +186,7 @@ static void test_ibw_types(void **state)
                             .data_unit = "m",
                             .dim_unit = "m"};
             wbuf bi = igor5(&si);
-            assert_int_equal(ljgap_files_ibw.read(bi.p, bi.n, NULL, &m, &e), 0);
+            assert_int_equal(ljgap__files_ibw.read(bi.p, bi.n, NULL, &m, &e), 0);
             for (size_t j = 0; j < m.ny; j++)
                 for (size_t i = 0; i < m.nx; i++)
                     assert_true(m.z[(m.ny - 1 - j) * m.nx + i] ==
@@ -199,8 +199,8 @@ static void test_ibw_types(void **state)
 static void test_ibw_nan_and_v2(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     igor_spec s = {.type = 2,
                    .nx = 5,
                    .ny = 4,
@@ -212,7 +212,7 @@ static void test_ibw_nan_and_v2(void **state)
     wbuf b = igor5(&s);
     float nan = NAN; /* Igor's blank at (2, 1): row 4 - 1 - 1 = 2 of the map */
     memcpy(b.p + 384 + 4 * (1 * 5 + 2), &nan, 4);
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, NULL, &m, &e), 0);
     assert_int_equal(m.missing, 1);
     assert_true(isnan(m.z[2 * 5 + 2]));
     assert_true(m.z[2 * 5 + 3] == igor_value(3, 1, 0));
@@ -221,8 +221,8 @@ static void test_ibw_nan_and_v2(void **state)
     /* version 2, both byte orders: a profile, nm heights, µm steps, a note with a date */
     for (int be = 0; be < 2; be++) {
         wbuf v = igor2(be, 40, "Date: 2020-02-29\rTime: 23:59:58\r");
-        assert_true(ljgap_files_ibw.probe(v.p, v.n));
-        assert_int_equal(ljgap_files_ibw.read(v.p, v.n, NULL, &m, &e), 0);
+        assert_true(ljgap__files_ibw.probe(v.p, v.n));
+        assert_int_equal(ljgap__files_ibw.read(v.p, v.n, NULL, &m, &e), 0);
         assert_int_equal(m.nx, 40);
         assert_int_equal(m.ny, 1);
         assert_true(fabs(m.size_x - 10e-6) < 1e-18);
@@ -237,11 +237,11 @@ static void test_ibw_nan_and_v2(void **state)
 }
 
 /* Every cut of a file before its end: BAD, an offset inside the file, no map. */
-static void check_truncations(const ljgap_files_format *f, const unsigned char *p, size_t n,
+static void check_truncations(const ljgap__files_format *f, const unsigned char *p, size_t n,
                               size_t keep)
 {
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     for (size_t cut = 0; cut + keep < n; cut++) {
         unsigned char *t = malloc(cut ? cut : 1); /* exactly cut bytes: ASan sees overreads */
         assert_non_null(t);
@@ -263,8 +263,8 @@ static void check_truncations(const ljgap_files_format *f, const unsigned char *
 static void test_ibw_bad(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     igor_spec s = {.type = 2,
                    .nx = 9,
                    .ny = 7,
@@ -276,14 +276,14 @@ static void test_ibw_bad(void **state)
                    .note = ASYLUM_NOTE,
                    .labels = asylum_labels};
     wbuf b = igor5(&s);
-    check_truncations(&ljgap_files_ibw, b.p, b.n, 0);
+    check_truncations(&ljgap__files_ibw, b.p, b.n, 0);
     wbuf v = igor2(1, 9, "Date: 2020-02-29\r");
-    check_truncations(&ljgap_files_ibw, v.p, v.n, 0);
+    check_truncations(&ljgap__files_ibw, v.p, v.n, 0);
     free(v.p);
     /* a wrong checksum: not claimed, and BAD when forced */
     b.p[64 + 100] ^= 1;
-    assert_false(ljgap_files_ibw.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_ibw.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_false(ljgap__files_ibw.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 0);
     b.p[64 + 100] ^= 1;
     /* inconsistent headers, each with its checksum repaired */
@@ -308,8 +308,8 @@ static void test_ibw_bad(void **state)
         for (size_t i = 0; i < 384; i += 2)
             sum += c.p[i] | (unsigned)c.p[i + 1] << 8;
         put_uint_at(&c, 2, (0x10000 - (sum & 0xffff)) & 0xffff, 2);
-        assert_true(ljgap_files_ibw.probe(c.p, c.n));
-        assert_int_equal(ljgap_files_ibw.read(c.p, c.n, NULL, &m, &e), cases[k].rc);
+        assert_true(ljgap__files_ibw.probe(c.p, c.n));
+        assert_int_equal(ljgap__files_ibw.read(c.p, c.n, NULL, &m, &e), cases[k].rc);
         assert_null(m.z);
         free(c.p);
     }
@@ -323,7 +323,7 @@ static void test_ibw_bad(void **state)
                      .data_unit = "m",
                      .dim_unit = "m"};
     wbuf g = igor5(&big);
-    assert_int_equal(ljgap_files_ibw.read(g.p, g.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
+    assert_int_equal(ljgap__files_ibw.read(g.p, g.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
     assert_null(m.z);
     free(g.p);
     free(b.p);
@@ -332,8 +332,8 @@ static void test_ibw_bad(void **state)
 static void test_park(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     park_spec s = {.version = 2,
                    .dtype = 2,
                    .xres = 12,
@@ -344,8 +344,8 @@ static void test_park(void **state)
                    .source = "Topography",
                    .park = 1};
     wbuf b = park_tiff(&s);
-    assert_true(ljgap_files_park_tiff.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_true(ljgap__files_park_tiff.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
     assert_string_equal(m.format, "park-tiff");
     assert_int_equal(m.nx, 12);
     assert_int_equal(m.ny, 7);
@@ -359,13 +359,13 @@ static void test_park(void **state)
         for (size_t i = 0; i < 12; i++)
             assert_true(m.z[(6 - j) * 12 + i] == 0.5 * park_raw(i, j) * 1e-6);
     map_free(&m);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, "0", &m, &e), 0);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "0", &m, &e), 0);
     map_free(&m);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, "topography", &m, &e), 0);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "topography", &m, &e), 0);
     map_free(&m);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, "1", &m, &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "1", &m, &e), LJGAP_FILES_CHANNEL);
     assert_null(m.z);
-    check_truncations(&ljgap_files_park_tiff, b.p, b.n, 0);
+    check_truncations(&ljgap__files_park_tiff, b.p, b.n, 0);
     free(b.p);
 
     /* version 1: int16, z scale and offset, nm */
@@ -380,7 +380,7 @@ static void test_park(void **state)
                     .source = "Z Height",
                     .park = 1};
     b = park_tiff(&s1);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
     for (size_t j = 0; j < 5; j++)
         for (size_t i = 0; i < 9; i++)
             assert_true(fabs(m.z[(4 - j) * 9 + i] - 2 * (park_raw(i, j) * 0.25 + 3) * 1e-9) <
@@ -400,7 +400,7 @@ static void test_park(void **state)
                     .swap = 1,
                     .park = 1};
     b = park_tiff(&s2);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
     assert_int_equal(m.nx, 6);
     assert_int_equal(m.ny, 4);
     assert_true(fabs(m.size_x - 8e-6) < 1e-18 && fabs(m.size_y - 4e-6) < 1e-18);
@@ -414,8 +414,8 @@ static void test_park(void **state)
 static void test_park_bad(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     park_spec s = {.version = 2,
                    .dtype = 2,
                    .xres = 4,
@@ -426,24 +426,24 @@ static void test_park_bad(void **state)
                    .source = "Topography",
                    .park = 0};
     wbuf b = park_tiff(&s); /* a plain TIFF: not Park's */
-    assert_false(ljgap_files_park_tiff.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_false(ljgap__files_park_tiff.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_null(m.z);
     free(b.p);
     s.park = 1; /* the same file as a big-endian TIFF: not Park's */
     b = park_tiff(&s);
     memcpy(b.p, "MM\0*", 4);
-    assert_false(ljgap_files_park_tiff.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_false(ljgap__files_park_tiff.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     free(b.p);
     s.short_header = 1;
     b = park_tiff(&s);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_non_null(strstr(e.msg, "header"));
     free(b.p);
     s.short_header = 0, s.dtype = 7;
     b = park_tiff(&s);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     free(b.p);
     /* the data tag shorter than the grid, a directory that runs past the end, TOOBIG */
     s.dtype = 2;
@@ -451,17 +451,17 @@ static void test_park_bad(void **state)
     size_t ifd = b.p[4] | (size_t)b.p[5] << 8;
     size_t data_entry = ifd + 2 + 12 * 12;
     b.p[data_entry + 4] -= 1;
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, (long)data_entry);
     b.p[data_entry + 4] += 1;
     b.p[ifd] = 0xff;
-    assert_false(ljgap_files_park_tiff.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_false(ljgap__files_park_tiff.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     b.p[ifd] = 14;
     size_t head = b.p[data_entry + 12 + 8] | (size_t)b.p[data_entry + 12 + 9] << 8;
     put_uint_at(&b, head + 100, 5000, 4);
     put_uint_at(&b, head + 104, 5000, 4);
-    assert_int_equal(ljgap_files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
+    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
     assert_null(m.z);
     free(b.p);
 }
@@ -469,12 +469,12 @@ static void test_park_bad(void **state)
 static void test_plu(void **state)
 {
     (void)state;
-    ljgap_files_map m;
-    ljgap_files_err e;
+    ljgap__files_map m;
+    ljgap__files_err e;
     wbuf b = plu_file(11, 6, 2, 3, 0);
-    assert_true(ljgap_files_plu.probe(b.p, b.n));
+    assert_true(ljgap__files_plu.probe(b.p, b.n));
     for (int l = 0; l < 2; l++) {
-        assert_int_equal(ljgap_files_plu.read(b.p, b.n, l ? "layer 1" : NULL, &m, &e), 0);
+        assert_int_equal(ljgap__files_plu.read(b.p, b.n, l ? "layer 1" : NULL, &m, &e), 0);
         assert_string_equal(m.format, "plu");
         assert_int_equal(m.channel_index, l);
         assert_int_equal(m.n_channels, 2);
@@ -496,31 +496,31 @@ static void test_plu(void **state)
         assert_int_equal(m.missing, missing);
         map_free(&m);
     }
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, "2", &m, &e), LJGAP_FILES_CHANNEL);
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, "2", &m, &e), LJGAP_FILES_CHANNEL);
     assert_null(m.z);
     /* every cut before the last layer's min and max (which a reader does not need) */
-    check_truncations(&ljgap_files_plu, b.p, b.n, 8);
+    check_truncations(&ljgap__files_plu, b.p, b.n, 8);
     free(b.p);
     /* a profile (type 1, one row): no y size; version 2006 and 0 layers (read as 1) */
     b = plu_file(30, 1, 0, 1, 255);
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, NULL, &m, &e), 0);
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), 0);
     assert_int_equal(m.ny, 1);
     assert_true(m.size_y == 0);
     map_free(&m);
     free(b.p);
     /* refused: multiple profiles (2), an unknown version, no date, TOOBIG */
     b = plu_file(4, 4, 1, 2, 0);
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     assert_int_equal(e.offset, 428);
     free(b.p);
     b = plu_file(4, 4, 1, 3, 7);
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     b.p[490] = 0, b.p[3] = '-';
-    assert_false(ljgap_files_plu.probe(b.p, b.n));
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
+    assert_false(ljgap__files_plu.probe(b.p, b.n));
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     b.p[3] = ' ';
     put_uint_at(&b, 500, 5000, 4), put_uint_at(&b, 504, 5000, 4);
-    assert_int_equal(ljgap_files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
+    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
     assert_null(m.z);
     free(b.p);
 }
@@ -597,8 +597,8 @@ static void test_mutations(void **state)
                     put_uint_at(&c, 2, (0x10000 - (sum & 0xffff)) & 0xffff, 2);
                 }
                 (void)readers[f]->probe(t, n);
-                ljgap_files_map m;
-                ljgap_files_err e;
+                ljgap__files_map m;
+                ljgap__files_err e;
                 int rc = readers[f]->read(t, n, v == 3 ? "1" : NULL, &m, &e);
                 if (rc == 0) {
                     size_t nan = 0;
@@ -636,8 +636,8 @@ static int dump(const char *format, const char *path, const char *channel)
     if (!buf) return 2;
     for (size_t r = 0; r < 3; r++) {
         if (strcmp(readers[r]->name, format)) continue;
-        ljgap_files_map m;
-        ljgap_files_err e;
+        ljgap__files_map m;
+        ljgap__files_err e;
         int rc = readers[r]->read(buf, n, channel, &m, &e);
         if (rc) {
             fprintf(stderr, "%s: %d %s (offset %ld)\n", path, rc, e.msg, e.offset);

@@ -50,19 +50,19 @@ typedef struct {
 static answer ask(const char *endpoint, const char *request)
 {
     char *s = strdup(request);
-    ljgap_reply r;
+    ljgap__reply r;
     answer a;
     assert_non_null(s);
     for (char *c = s; *c; c++)
         if (*c == '\'') *c = '"';
-    ljgap_handle(endpoint, s, strlen(s), &r);
+    ljgap__handle(endpoint, s, strlen(s), &r);
     assert_non_null(r.body);
     assert_int_equal(r.len, strlen(r.body));
     a.status = r.status;
     a.ctype = r.content_type;
     a.body = cJSON_Parse(r.body);
     if (!a.body) fail_msg("answer is not JSON: %s", r.body);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     free(s);
     return a;
 }
@@ -296,13 +296,13 @@ static void table_too_long(void **state)
 
 static void sweep_too_many_values(void **state)
 {
-    ljgap_limits l;
-    ljgap_limits_default(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
     l.max_points = 2;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     expect_pointer("sweep", WITH("'vary':'m0','values':[0.1,0.2,0.3]"), "/values");
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
 }
 
 /* ---- problems other than validation ---- */
@@ -347,14 +347,14 @@ static void body_not_nul_terminated(void **state)
 {
     /* the handler reads len bytes only: "{}" followed by garbage it must not see */
     const char buf[] = "{}garbage";
-    ljgap_reply r;
-    ljgap_handle("adhesion", buf, 2, &r);
+    ljgap__reply r;
+    ljgap__handle("adhesion", buf, 2, &r);
     assert_int_equal(r.status, 422); /* {} is valid JSON without psd */
     assert_non_null(strstr(r.body, "/psd"));
-    ljgap_reply_free(&r);
-    ljgap_handle("adhesion", buf, 4, &r);
+    ljgap__reply_free(&r);
+    ljgap__handle("adhesion", buf, 4, &r);
     assert_int_equal(r.status, 400);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 static void unknown_endpoint(void **state)
@@ -365,21 +365,21 @@ static void unknown_endpoint(void **state)
     a = ask("", "{}");
     check_problem(&a, 404, "not-found");
     cJSON_Delete(a.body);
-    assert_true(ljgap_handler_has("adhesion"));
-    assert_true(ljgap_handler_has("sweep"));
-    assert_true(ljgap_handler_has("contact"));
-    assert_false(ljgap_handler_has(NULL));
+    assert_true(ljgap__handler_has("adhesion"));
+    assert_true(ljgap__handler_has("sweep"));
+    assert_true(ljgap__handler_has("contact"));
+    assert_false(ljgap__handler_has(NULL));
 }
 
 static void time_cap(void **state)
 {
-    ljgap_limits l;
-    ljgap_limits_default(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
     l.max_seconds = 1e-12;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     answer a = ask("adhesion", "{'psd':" PSD "}");
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
     check_problem(&a, 422, "cap-exceeded");
     assert_non_null(strstr(str(a.body, "detail"), "max_seconds"));
     cJSON_Delete(a.body);
@@ -388,13 +388,13 @@ static void time_cap(void **state)
 static void cancelled(void **state)
 {
     static volatile int stop = 1;
-    ljgap_limits l;
-    ljgap_limits_default(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
     l.cancel = &stop;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     answer a = ask("traction", "{'psd':" PSD ",'g_ave':[1.2,2]}");
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
     check_problem(&a, 503, "unavailable");
     cJSON_Delete(a.body);
 }
@@ -843,11 +843,11 @@ static void sweep_threads_agree(void **state)
                       "'values':[2.2,2.4,2.6,2.8]}";
     char *out[2];
     for (int k = 0; k < 2; k++) {
-        ljgap_limits l;
+        ljgap__limits l;
         answer a;
-        ljgap_limits_default(&l);
+        ljgap__limits_default(&l);
         l.sweep_threads = k ? 4 : 1;
-        ljgap_handler_set_limits(&l);
+        ljgap__handler_set_limits(&l);
         a = ask("sweep", req);
         check_meta(&a, "pde");
         assert_int_equal(cJSON_GetArraySize(get(get(a.body, "si"), "results")), 4);
@@ -855,9 +855,9 @@ static void sweep_threads_agree(void **state)
         out[k] = cJSON_PrintUnformatted(a.body);
         cJSON_Delete(a.body);
     }
-    ljgap_limits l;
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
     assert_string_equal(out[0], out[1]);
     free(out[0]);
     free(out[1]);
@@ -877,14 +877,14 @@ static void *worker(void *arg)
 {
     char **out = arg;
     for (size_t i = 0; i < sizeof mixed / sizeof mixed[0]; i++) {
-        ljgap_reply r;
+        ljgap__reply r;
         cJSON *body;
-        ljgap_handle("adhesion", mixed[i], strlen(mixed[i]), &r);
+        ljgap__handle("adhesion", mixed[i], strlen(mixed[i]), &r);
         body = cJSON_Parse(r.body);
         cJSON_DeleteItemFromObjectCaseSensitive(body, "meta");
         out[i] = cJSON_PrintUnformatted(body);
         cJSON_Delete(body);
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
     return NULL;
 }

@@ -57,14 +57,14 @@ static int contact(const char *psd, double E, double dg, double eps, double R, i
                    char *pointer, size_t size)
 {
     char body[600];
-    ljgap_reply r;
+    ljgap__reply r;
     cJSON *doc, *w, *e;
     int status;
     snprintf(body, sizeof body,
              "{\"psd\":%s,\"tol\":1e-3,\"material\":{\"E_star\":%.17g,\"dgamma\":%.17g,"
              "\"epsilon\":%.17g},\"R\":%.17g}",
              psd, E, dg, eps, R);
-    ljgap_handle("contact", body, strlen(body), &r);
+    ljgap__handle("contact", body, strlen(body), &r);
     status = r.status;
     doc = cJSON_Parse(r.body);
     assert_non_null(doc);
@@ -79,7 +79,7 @@ static int contact(const char *psd, double E, double dg, double eps, double R, i
              e ? cJSON_GetObjectItem(e, "pointer")->valuestring : "(no errors[])");
     if (status != 200 && status != 422) fail_msg("status %d: %.300s", status, r.body);
     cJSON_Delete(doc);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     return status;
 }
 

@@ -25,11 +25,11 @@ typedef struct {
     char dir[STATEDIR_LEN];  /* root/state: the state directory */
 } fixture;
 
-static ljgap_jobstore *open_ok(const char *dir);
+static ljgap__jobstore *open_ok(const char *dir);
 
 /* ---- the contract, on SQLite ---- */
 
-static ljgap_jobstore *contract_open(void **state)
+static ljgap__jobstore *contract_open(void **state)
 {
     return open_ok(((fixture *)*state)->dir);
 }
@@ -84,11 +84,11 @@ static int teardown(void **state)
     return 0;
 }
 
-static ljgap_jobstore *open_ok(const char *dir)
+static ljgap__jobstore *open_ok(const char *dir)
 {
-    ljgap_jobstore *st = NULL;
+    ljgap__jobstore *st = NULL;
     char err[600] = "";
-    int rc = ljgap_jobstore_open_sqlite(dir, &st, err, sizeof err);
+    int rc = ljgap__jobstore_open_sqlite(dir, &st, err, sizeof err);
     if (rc != LJGAP_JOBSTORE_OK) print_error("open %s: %s\n", dir, err);
     assert_int_equal(rc, LJGAP_JOBSTORE_OK);
     assert_non_null(st);
@@ -98,9 +98,9 @@ static ljgap_jobstore *open_ok(const char *dir)
 /* Opening dir fails, and the message names `names` and contains `why`. */
 static void open_fails(const char *dir, const char *names, const char *why)
 {
-    ljgap_jobstore *st = (ljgap_jobstore *)1;
+    ljgap__jobstore *st = (ljgap__jobstore *)1;
     char err[600] = "";
-    assert_int_not_equal(ljgap_jobstore_open_sqlite(dir, &st, err, sizeof err), LJGAP_JOBSTORE_OK);
+    assert_int_not_equal(ljgap__jobstore_open_sqlite(dir, &st, err, sizeof err), LJGAP_JOBSTORE_OK);
     assert_null(st);
     if (!strstr(err, names) || !strstr(err, why))
         print_error("message \"%s\" should name %s and say \"%s\"\n", err, names, why);
@@ -113,7 +113,7 @@ static void test_open_creates(void **state)
     fixture *f = *state;
     char deep[STATEDIR_LEN], path[PATH_MAX], text[64] = "";
     struct stat sb;
-    ljgap_jobstore *st;
+    ljgap__jobstore *st;
     sqlite3 *db;
     sqlite3_stmt *q;
     FILE *lock;
@@ -142,9 +142,9 @@ static void test_open_creates(void **state)
     assert_int_equal(sqlite3_column_int(q, 0), 1);
     sqlite3_finalize(q);
     sqlite3_close(db);
-    ljgap_jobstore_close(st);
-    ljgap_jobstore_close(open_ok(deep)); /* and opens again */
-    ljgap_jobstore_close(NULL);
+    ljgap__jobstore_close(st);
+    ljgap__jobstore_close(open_ok(deep)); /* and opens again */
+    ljgap__jobstore_close(NULL);
 }
 
 /* Closing with jobs running (a crash, as far as the file knows) and opening again: running
@@ -153,34 +153,34 @@ static void test_open_creates(void **state)
 static void test_reopen(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_ok(f->dir);
+    ljgap__jobstore *st = open_ok(f->dir);
     static const char answer[] = "{\"sigma\":[0.1,2.5e-07,-3],\"s\":\"\xc3\xa9\"}";
-    ljgap_job_record rec;
+    ljgap__job_record rec;
     run_to_done(st, ID_D, answer);
     create_ok(st, ID_A, "{\"a\":1}");
     create_ok(st, ID_B, "{}");
     create_ok(st, ID_C, "{}");
     claim_ok(st, ID_A, 30);
     claim_ok(st, ID_B, 30);
-    assert_int_equal(ljgap_jobstore_cancel(st, ID_B, &rec), LJGAP_JOBSTORE_OK);
-    ljgap_job_record_clear(&rec);
-    ljgap_jobstore_close(st);
+    assert_int_equal(ljgap__jobstore_cancel(st, ID_B, &rec), LJGAP_JOBSTORE_OK);
+    ljgap__job_record_clear(&rec);
+    ljgap__jobstore_close(st);
 
     st = open_ok(f->dir);
-    assert_int_equal(ljgap_jobstore_get(st, ID_A, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_get(st, ID_A, &rec), LJGAP_JOBSTORE_OK);
     assert_true(rec.state == LJGAP_JOB_QUEUED && rec.lost == 1 && rec.progress == 0);
-    ljgap_job_record_clear(&rec);
+    ljgap__job_record_clear(&rec);
     assert_int_equal(state_of(st, ID_B), LJGAP_JOB_CANCELLED);
     assert_int_equal(state_of(st, ID_C), LJGAP_JOB_QUEUED);
-    assert_int_equal(ljgap_jobstore_get(st, ID_D, &rec), LJGAP_JOBSTORE_OK);
+    assert_int_equal(ljgap__jobstore_get(st, ID_D, &rec), LJGAP_JOBSTORE_OK);
     assert_int_equal(rec.answer_len, sizeof answer - 1);
     assert_memory_equal(rec.answer, answer, sizeof answer - 1);
-    ljgap_job_record_clear(&rec);
-    assert_int_equal(ljgap_jobstore_claim(st, "t", 30, &rec), LJGAP_JOBSTORE_OK);
+    ljgap__job_record_clear(&rec);
+    assert_int_equal(ljgap__jobstore_claim(st, "t", 30, &rec), LJGAP_JOBSTORE_OK);
     assert_string_equal(rec.id, ID_A); /* in its old place */
     assert_string_equal(rec.request, "{\"a\":1}");
-    ljgap_job_record_clear(&rec);
-    ljgap_jobstore_close(st);
+    ljgap__job_record_clear(&rec);
+    ljgap__jobstore_close(st);
 }
 
 /* ---- opening fails, with the path and the reason ---- */
@@ -202,13 +202,13 @@ static void test_uncreatable(void **state)
 static void test_locked(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_ok(f->dir);
+    ljgap__jobstore *st = open_ok(f->dir);
     char pid[32];
     snprintf(pid, sizeof pid, "pid %ld", (long)getpid());
     open_fails(f->dir, f->dir, "in use by another process");
     open_fails(f->dir, f->dir, pid);
-    ljgap_jobstore_close(st);
-    ljgap_jobstore_close(open_ok(f->dir)); /* free again once closed */
+    ljgap__jobstore_close(st);
+    ljgap__jobstore_close(open_ok(f->dir)); /* free again once closed */
 }
 
 /* writes n bytes of text at offset into dir/jobs.sqlite (creating it) */
@@ -236,14 +236,14 @@ static void test_not_a_database(void **state)
 static void test_corrupt_page(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore *st = open_ok(f->dir);
+    ljgap__jobstore *st = open_ok(f->dir);
     char junk[512];
     char id[LJGAP_JOB_ID_LEN + 1];
     for (int i = 0; i < 20; i++) {
-        assert_int_equal(ljgap_job_id_new(id), 0);
+        assert_int_equal(ljgap__job_id_new(id), 0);
         create_ok(st, id, "{\"some\":\"request body of a fair length to fill pages\"}");
     }
-    ljgap_jobstore_close(st); /* checkpoints the WAL into the file */
+    ljgap__jobstore_close(st); /* checkpoints the WAL into the file */
     memset(junk, 0xa5, sizeof junk);
     scribble(f->dir, 4096 + 0, junk, sizeof junk); /* page 2: the jobs table's root */
     open_fails(f->dir, "jobs.sqlite", "corrupt");
@@ -260,7 +260,7 @@ static void test_foreign_database(void **state)
 static void test_schema_too_new(void **state)
 {
     fixture *f = *state;
-    ljgap_jobstore_close(open_ok(f->dir));
+    ljgap__jobstore_close(open_ok(f->dir));
     statedir_sql(f->dir, "UPDATE schema_version SET version = 99");
     open_fails(f->dir, "jobs.sqlite", "schema version 99");
     statedir_sql(f->dir, "DROP TABLE schema_version");
@@ -292,10 +292,10 @@ static void as_nobody(const char *dir, int (*check)(const char *dir))
 /* 0 when opening dir fails naming it with the reason `want` */
 static int fails_with(const char *dir, const char *want)
 {
-    ljgap_jobstore *st = NULL;
+    ljgap__jobstore *st = NULL;
     char err[600] = "";
-    if (ljgap_jobstore_open_sqlite(dir, &st, err, sizeof err) == LJGAP_JOBSTORE_OK) {
-        ljgap_jobstore_close(st);
+    if (ljgap__jobstore_open_sqlite(dir, &st, err, sizeof err) == LJGAP_JOBSTORE_OK) {
+        ljgap__jobstore_close(st);
         return 1;
     }
     if (!strstr(err, dir) || !strstr(err, want)) {
@@ -331,7 +331,7 @@ static void test_unwritable(void **state)
     as_nobody(f->dir, uncreatable_dir);
     /* a writable directory, but the database file is read-only */
     assert_int_equal(chmod(f->dir, 0777), 0);
-    ljgap_jobstore_close(open_ok(f->dir));
+    ljgap__jobstore_close(open_ok(f->dir));
     snprintf(path, sizeof path, "%s/lock", f->dir);
     assert_int_equal(chmod(path, 0666), 0);
     snprintf(path, sizeof path, "%s/jobs.sqlite", f->dir);
@@ -345,11 +345,11 @@ static void test_rfc3339(void **state)
 {
     char buf[40];
     (void)state;
-    ljgap_rfc3339(0, buf, sizeof buf);
+    ljgap__rfc3339(0, buf, sizeof buf);
     assert_string_equal(buf, "1970-01-01T00:00:00.000Z");
-    ljgap_rfc3339(1700000000.9996, buf, sizeof buf); /* rounds up into the next second */
+    ljgap__rfc3339(1700000000.9996, buf, sizeof buf); /* rounds up into the next second */
     assert_string_equal(buf, "2023-11-14T22:13:21.000Z");
-    ljgap_rfc3339(951782400.25, buf, sizeof buf);
+    ljgap__rfc3339(951782400.25, buf, sizeof buf);
     assert_string_equal(buf, "2000-02-29T00:00:00.250Z");
 }
 

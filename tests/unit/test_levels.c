@@ -1,5 +1,5 @@
 /* test_levels.c -- the single-level entry points the error-against-time benchmark uses
- * (bench/errtime.c): ljgap_pde_pdf_at_level and ljgap__paper_summary_at / _pdf_at.
+ * (bench/errtime.c): ljgap__pde_pdf_at_level and ljgap__paper_summary_at / _pdf_at.
  *
  * A single level must be exactly what the drivers compute at that level (the paper's) or
  * converge at the scheme's order to what the driver returns (the PDE's), and keep the
@@ -37,7 +37,7 @@ static void test_pde_pdf_levels(void **state)
     double s[5];
     for (int L = 0; L < 5; L++) {
         ljgap_pdf out;
-        assert_int_equal(ljgap_pde_pdf_at_level(&p, 0.98, 5.0, 0.5, 8.0, L, &out), LJGAP_OK);
+        assert_int_equal(ljgap__pde_pdf_at_level(&p, 0.98, 5.0, 0.5, 8.0, L, &out), LJGAP_OK);
         assert_close(out.mass, 1.0, 1e-12);
         assert_close(out.mean, 0.98, 1e-12);
         double l1 = 0; /* the density integrates to the mass on the cell widths */
@@ -59,7 +59,7 @@ static void test_pde_pdf_levels(void **state)
     assert_close(s[4], ref.sigma.value, 2.0 * fabs(s[4] - s[3]));
     ljgap_pdf_release(&ref, 1);
     ljgap_pdf out;
-    assert_int_equal(ljgap_pde_pdf_at_level(&p, 0.4, 5.0, 0.5, 8.0, 0, &out), LJGAP_EINVAL);
+    assert_int_equal(ljgap__pde_pdf_at_level(&p, 0.4, 5.0, 0.5, 8.0, 0, &out), LJGAP_EINVAL);
 }
 
 /* With tol = 1 the paper's drivers run Vmax and Vmax/2 and report the latter: a single level

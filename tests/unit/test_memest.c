@@ -75,16 +75,16 @@ static int measured(const char *what, work w, const void *arg, size_t est)
 typedef struct {
     char *body;
     size_t len;
-    ljgap_param p[2];
+    ljgap__param p[2];
 } text_case;
 
 static void run_text(const void *arg)
 {
     const text_case *t = arg;
-    ljgap_reply rep;
-    ljgap_handle_text("psd", t->p, 1, t->body, t->len, NULL, &rep);
+    ljgap__reply rep;
+    ljgap__handle_text("psd", t->p, 1, t->body, t->len, NULL, &rep);
     if (rep.status != 200) fprintf(stderr, "status %d: %.300s\n", rep.status, rep.body);
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
 }
 
 /* A ny x nx map of random heights as text, "%.9e" each: a random walk along each row (a
@@ -110,9 +110,9 @@ static text_case text_map(size_t nx, size_t ny)
 
 static size_t text_estimate(const text_case *t)
 {
-    ljgap_token_count tc = {0};
-    ljgap_token_feed(&tc, t->body, t->len);
-    return ljgap_memest_psd_text(tc.tokens);
+    ljgap__token_count tc = {0};
+    ljgap__token_feed(&tc, t->body, t->len);
+    return ljgap__memest_psd_text(tc.tokens);
 }
 
 static void test_text_psd(void **state)
@@ -130,10 +130,10 @@ static void test_text_psd(void **state)
 static void test_tokens_in_pieces(void **state)
 {
     const char *s = "1 2,3\t4e5\n# note\n-6 ,7\r\n8";
-    ljgap_token_count whole = {0}, parts = {0};
-    ljgap_token_feed(&whole, s, strlen(s));
+    ljgap__token_count whole = {0}, parts = {0};
+    ljgap__token_feed(&whole, s, strlen(s));
     for (size_t i = 0; s[i]; i++)
-        ljgap_token_feed(&parts, s + i, 1);
+        ljgap__token_feed(&parts, s + i, 1);
     assert_int_equal(whole.tokens, 8); /* 7 values and the comment's word ("#" separates) */
     assert_int_equal(parts.tokens, whole.tokens);
 }
@@ -146,10 +146,10 @@ typedef struct {
 static void run_json(const void *arg)
 {
     const json_case *j = arg;
-    ljgap_reply rep;
-    ljgap_handle(j->endpoint, j->body, strlen(j->body), &rep);
+    ljgap__reply rep;
+    ljgap__handle(j->endpoint, j->body, strlen(j->body), &rep);
     if (rep.status != 200) fprintf(stderr, "status %d: %.300s\n", rep.status, rep.body);
-    ljgap_reply_free(&rep);
+    ljgap__reply_free(&rep);
 }
 
 /* Height maps in JSON near the 1 MiB body limit, where the body's values dominate the estimate:
@@ -181,7 +181,7 @@ static void test_json_map(void **state)
         snprintf(what, sizeof what, "JSON psd, %zu x %zu heights in %zu bytes", n[c], n[c],
                  strlen(b));
         assert_int_equal(measured(what, run_json, &j,
-                                  ljgap_memest_json(strlen(b), ljgap_json_values(b, strlen(b)), 1)),
+                                  ljgap__memest_json(strlen(b), ljgap__json_values(b, strlen(b)), 1)),
                          0);
         free(b);
     }
@@ -193,7 +193,7 @@ static void test_json(void **state)
                    "\"montecarlo\",\"samples\":100000}",
                    "adhesion"};
     /* a small body: the fixed allowance is the whole estimate, so only the bound is checked */
-    size_t est = ljgap_memest_json(strlen(j.body), ljgap_json_values(j.body, strlen(j.body)), 1);
+    size_t est = ljgap__memest_json(strlen(j.body), ljgap__json_values(j.body, strlen(j.body)), 1);
     int r = measured("JSON adhesion (Monte Carlo)", run_json, &j, est);
     assert_true(r == 0 || r == 2);
 }
@@ -205,16 +205,16 @@ typedef struct {
 static void run_sim(const void *arg)
 {
     const sim_case *s = arg;
-    ljgap_reply rep;
-    ljgap_sim_control ctl = {0};
-    ljgap_sim_request *sr = ljgap_sim_request_parse(s->body, strlen(s->body), &rep);
+    ljgap__reply rep;
+    ljgap__sim_control ctl = {0};
+    ljgap__sim_request *sr = ljgap__sim_request_parse(s->body, strlen(s->body), &rep);
     if (!sr) {
         fprintf(stderr, "sim: %.300s\n", rep.body);
         _exit(4);
     }
-    ljgap_sim_request_run(sr, &ctl, &rep);
-    ljgap_sim_request_free(sr);
-    ljgap_reply_free(&rep);
+    ljgap__sim_request_run(sr, &ctl, &rep);
+    ljgap__sim_request_free(sr);
+    ljgap__reply_free(&rep);
 }
 
 static void test_sim(void **state)
@@ -223,18 +223,18 @@ static void test_sim(void **state)
     for (unsigned threads = 1; threads <= 2; threads++)
         for (size_t i = 0; i < sizeof grid / sizeof grid[0]; i++) {
             sim_case s;
-            ljgap_limits l;
+            ljgap__limits l;
             char what[64];
-            ljgap_limits_default(&l);
+            ljgap__limits_default(&l);
             l.sim_threads = (int)threads;
-            ljgap_handler_set_limits(&l);
+            ljgap__handler_set_limits(&l);
             snprintf(s.body, sizeof s.body,
                      "{\"psd\":{\"kind\":\"power\",\"D\":2.2,\"k1\":1,\"k2\":8,\"m0\":0.1},"
                      "\"n\":%d,\"realizations\":2,\"g_ave\":[3]}",
                      grid[i]);
             snprintf(what, sizeof what, "simulation %d² on %u thread%s", grid[i], threads,
                      threads > 1 ? "s" : "");
-            size_t est = ljgap_memest_sim_request(s.body, strlen(s.body), threads);
+            size_t est = ljgap__memest_sim_request(s.body, strlen(s.body), threads);
             int r = measured(what, run_sim, &s, est);
             assert_true(r == 0 || r == 2); /* small grids: the fixed allowance dominates */
         }

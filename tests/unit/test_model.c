@@ -39,15 +39,15 @@
 static cJSON *ask(const char *endpoint, const char *request)
 {
     char *s = strdup(request);
-    ljgap_reply r;
+    ljgap__reply r;
     assert_non_null(s);
     for (char *c = s; *c; c++)
         if (*c == '\'') *c = '"';
-    ljgap_handle(endpoint, s, strlen(s), &r);
+    ljgap__handle(endpoint, s, strlen(s), &r);
     if (r.status != 200) fail_msg("%s: status %d: %s", endpoint, r.status, r.body);
     cJSON *a = cJSON_Parse(r.body);
     assert_non_null(a);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     free(s);
     return a;
 }
@@ -212,8 +212,8 @@ static void table_method(void **state)
 static void get_validity(void **state)
 {
     (void)state;
-    ljgap_reply r;
-    ljgap_validity_reply(&r);
+    ljgap__reply r;
+    ljgap__validity_reply(&r);
     assert_int_equal(r.status, 200);
     cJSON *a = cJSON_Parse(r.body);
     assert_non_null(a);
@@ -232,7 +232,7 @@ static void get_validity(void **state)
     assert_true(strlen(get(get(a, "how"), "command")->valuestring) > 0);
     assert_string_equal(get(get(a, "meta"), "method")->valuestring, "validity map");
     cJSON_Delete(a);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 int main(void)

@@ -367,7 +367,7 @@ static void test_convergence_order(void **state)
     ljgap_psd p = power(2.5, 1, INFINITY, LJGAP_LEVEL_C, 1 / (4 * M_PI));
     ljgap_summary s[4];
     for (int L = 0; L < 4; L++)
-        assert_int_equal(ljgap_pde_summary_at_level(&p, 0.45, 60, L, &s[L]), LJGAP_OK);
+        assert_int_equal(ljgap__pde_summary_at_level(&p, 0.45, 60, L, &s[L]), LJGAP_OK);
     const double *v[4] = {&s[0].g_eq.value, &s[1].g_eq.value, &s[2].g_eq.value, &s[3].g_eq.value};
     for (int q = 0; q < 4; q++) {
         /* q-th summary field: g_eq, sigma_max, g_at_max, dgamma_eff (ljgap_est stride) */
@@ -394,7 +394,7 @@ static void test_extrapolated_order_and_estimate(void **state)
         ljgap_psd p = power(2.5, 1, k2s[c], LJGAP_LEVEL_M0, 0.5);
         ljgap_summary s[5];
         for (int L = 0; L < 5; L++)
-            assert_int_equal(ljgap_pde_summary_at_level(&p, 0.45, 60, L, &s[L]), LJGAP_OK);
+            assert_int_equal(ljgap__pde_summary_at_level(&p, 0.45, 60, L, &s[L]), LJGAP_OK);
         for (int q = 0; q < 4; q++) {
             double v[5], R[5];
             for (int L = 0; L < 5; L++)

@@ -45,13 +45,13 @@ static void test_openapi_lists_the_table(void **state)
         const char *t = cJSON_GetStringValue(e);
         assert_non_null(t);
         if (strncmp(t, LJGAP_PROBLEM_BASE, strlen(LJGAP_PROBLEM_BASE)) != 0 ||
-            !ljgap_problem_find(t + strlen(LJGAP_PROBLEM_BASE)))
+            !ljgap__problem_find(t + strlen(LJGAP_PROBLEM_BASE)))
             fail_msg("openapi.json lists %s, which the table of problems.c has not", t);
     }
-    for (size_t i = 0; ljgap_problem_at(i); i++) {
+    for (size_t i = 0; ljgap__problem_at(i); i++) {
         char t[80];
         int found = 0;
-        snprintf(t, sizeof t, LJGAP_PROBLEM_BASE "%s", ljgap_problem_at(i)->slug);
+        snprintf(t, sizeof t, LJGAP_PROBLEM_BASE "%s", ljgap__problem_at(i)->slug);
         cJSON_ArrayForEach(e, types) found |= strcmp(cJSON_GetStringValue(e), t) == 0;
         if (!found) fail_msg("openapi.json does not list %s", t);
     }
@@ -60,12 +60,12 @@ static void test_openapi_lists_the_table(void **state)
 
 static void test_pages(void **state)
 {
-    ljgap_reply r;
+    ljgap__reply r;
     (void)state;
-    for (size_t i = 0; ljgap_problem_at(i); i++) {
-        const ljgap_problem_doc *d = ljgap_problem_at(i);
+    for (size_t i = 0; ljgap__problem_at(i); i++) {
+        const ljgap__problem_doc *d = ljgap__problem_at(i);
         assert_true(d->status >= 400 && d->status <= 599);
-        ljgap_problem_page(d->slug, &r);
+        ljgap__problem_page(d->slug, &r);
         assert_int_equal(r.status, 200);
         assert_string_equal(r.content_type, "text/html; charset=utf-8");
         assert_int_equal(r.len, strlen(r.body));
@@ -75,21 +75,21 @@ static void test_pages(void **state)
         assert_non_null(strstr(r.body, "<!DOCTYPE html>"));
         assert_null(strstr(r.body, "<script")); /* nothing inline: the CSP is default-src 'self' */
         assert_null(strstr(r.body, "style="));
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
-    ljgap_problem_page("", &r);
+    ljgap__problem_page("", &r);
     assert_int_equal(r.status, 200);
-    for (size_t i = 0; ljgap_problem_at(i); i++) {
+    for (size_t i = 0; ljgap__problem_at(i); i++) {
         char link[100];
-        snprintf(link, sizeof link, "href=\"/problems/%s\"", ljgap_problem_at(i)->slug);
+        snprintf(link, sizeof link, "href=\"/problems/%s\"", ljgap__problem_at(i)->slug);
         assert_non_null(strstr(r.body, link));
     }
-    ljgap_reply_free(&r);
-    ljgap_problem_page("no-such-type", &r);
+    ljgap__reply_free(&r);
+    ljgap__problem_page("no-such-type", &r);
     assert_int_equal(r.status, 404);
     assert_string_equal(r.content_type, "application/problem+json");
     assert_non_null(strstr(r.body, "\"type\":\"/problems/not-found\""));
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
 }
 
 /* The handler's problems: type from the table, with the table's status and title. */
@@ -106,23 +106,23 @@ static void test_handler_types(void **state)
     };
     (void)state;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        ljgap_reply r;
+        ljgap__reply r;
         cJSON *doc;
         const char *type;
-        const ljgap_problem_doc *d;
-        ljgap_call call = {.accept = cases[i].accept};
-        ljgap_handle_call(cases[i].endpoint, cases[i].body, strlen(cases[i].body), &call, &r);
+        const ljgap__problem_doc *d;
+        ljgap__call call = {.accept = cases[i].accept};
+        ljgap__handle_call(cases[i].endpoint, cases[i].body, strlen(cases[i].body), &call, &r);
         doc = cJSON_Parse(r.body);
         type = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(doc, "type"));
         assert_non_null(type);
         assert_true(strncmp(type, LJGAP_PROBLEM_BASE, strlen(LJGAP_PROBLEM_BASE)) == 0);
-        d = ljgap_problem_find(type + strlen(LJGAP_PROBLEM_BASE));
+        d = ljgap__problem_find(type + strlen(LJGAP_PROBLEM_BASE));
         assert_non_null(d);
         assert_int_equal(r.status, d->status);
         assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(doc, "title")),
                             d->title);
         cJSON_Delete(doc);
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
 }
 

@@ -130,28 +130,28 @@ typedef struct {
     cJSON *body;
 } answer;
 
-static answer parse_reply(ljgap_reply *r)
+static answer parse_reply(ljgap__reply *r)
 {
     answer a = {r->status, cJSON_Parse(r->body)};
     if (!a.body) fail_msg("not JSON: %.300s", r->body);
-    ljgap_reply_free(r);
+    ljgap__reply_free(r);
     return a;
 }
 
 static answer ask(const char *endpoint, const char *body)
 {
-    ljgap_reply r;
-    ljgap_handle(endpoint, body, strlen(body), &r);
+    ljgap__reply r;
+    ljgap__handle(endpoint, body, strlen(body), &r);
     return parse_reply(&r);
 }
 
 /* A text upload; query is "name=value&..." (no decoding needed here). */
 static answer ask_text(const char *endpoint, const char *query, const char *body, size_t len)
 {
-    ljgap_param p[16];
+    ljgap__param p[16];
     char *q = strdup(query), *save = NULL;
     size_t n = 0;
-    ljgap_reply r;
+    ljgap__reply r;
     assert_non_null(q);
     for (char *t = strtok_r(q, "&", &save); t && n < 16; t = strtok_r(NULL, "&", &save)) {
         char *eq = strchr(t, '=');
@@ -159,7 +159,7 @@ static answer ask_text(const char *endpoint, const char *query, const char *body
         p[n].value = eq ? (*eq = '\0', eq + 1) : NULL;
         n++;
     }
-    ljgap_handle_text(endpoint, p, n, body, len, NULL, &r);
+    ljgap__handle_text(endpoint, p, n, body, len, NULL, &r);
     free(q);
     return parse_reply(&r);
 }
@@ -530,13 +530,13 @@ static void bad_json_inputs(void **state)
     expect_one(ask("psd", "{}"), "/topography", NULL, "no topography");
     expect_one(ask("psd", "{\"topography\":[]}"), "/topography", NULL, "topography an array");
     /* the server's cap on points */
-    ljgap_limits l;
-    ljgap_limits_default(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
     l.max_topo_points = 255;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     expect_json(bad_json("0", 0, 0, NULL, NULL, NULL), "/topography/heights", "over the cap");
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
 }
 
 /* A 16 × 16 text matrix with line r (1-based, of the matrix) replaced by line. */
@@ -627,20 +627,20 @@ static void bad_text_query(void **state)
     assert_true(cJSON_IsTrue(get(get(a.body, "grid"), "periodic")));
     cJSON_Delete(a.body);
     /* text for another endpoint */
-    ljgap_reply r;
-    ljgap_handle_text("adhesion", NULL, 0, t, strlen(t), NULL, &r);
+    ljgap__reply r;
+    ljgap__handle_text("adhesion", NULL, 0, t, strlen(t), NULL, &r);
     assert_int_equal(r.status, 404);
-    assert_true(ljgap_handler_has_text("psd") && !ljgap_handler_has_text("adhesion"));
-    ljgap_reply_free(&r);
+    assert_true(ljgap__handler_has_text("psd") && !ljgap__handler_has_text("adhesion"));
+    ljgap__reply_free(&r);
     /* the cap on points stops the parse */
-    ljgap_limits l;
-    ljgap_limits_default(&l);
+    ljgap__limits l;
+    ljgap__limits_default(&l);
     l.max_topo_points = 100;
-    ljgap_handler_set_limits(&l);
+    ljgap__handler_set_limits(&l);
     expect_one(ask_text("psd", "dx=1e-8", t, strlen(t)), "/topography/heights",
                "more than 100 heights (line 7)", "over the cap");
-    ljgap_limits_default(&l);
-    ljgap_handler_set_limits(&l);
+    ljgap__limits_default(&l);
+    ljgap__handler_set_limits(&l);
     free(t);
 }
 
@@ -784,16 +784,16 @@ typedef struct {
 static void *worker(void *p)
 {
     worker_arg *w = p;
-    ljgap_reply r;
+    ljgap__reply r;
     for (int i = 0; i < 4; i++) {
-        ljgap_handle("psd", w->req, strlen(w->req), &r);
+        ljgap__handle("psd", w->req, strlen(w->req), &r);
         if (r.status == 200) {
             cJSON *b = cJSON_Parse(r.body);
             free(w->answer);
             w->answer = b ? without_meta(b) : NULL;
             cJSON_Delete(b);
         }
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
     }
     return NULL;
 }

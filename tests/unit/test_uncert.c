@@ -39,13 +39,13 @@
 
 static cJSON *ask(const char *endpoint, const char *body, int *status)
 {
-    ljgap_reply r;
+    ljgap__reply r;
     cJSON *doc;
-    ljgap_handle(endpoint, body, strlen(body), &r);
+    ljgap__handle(endpoint, body, strlen(body), &r);
     *status = r.status;
     doc = cJSON_ParseWithLength(r.body, r.len);
     assert_non_null(doc);
-    ljgap_reply_free(&r);
+    ljgap__reply_free(&r);
     return doc;
 }
 
@@ -429,7 +429,7 @@ static void honest_over_maps(void **state)
     double *h = malloc(HN * HN * sizeof *h), v[3][HMAPS], e2[3] = {0};
     realsurf_spec s = {0};
     int windowed = getenv("UNCERT_WINDOWED") != NULL;
-    ljgap_param q[5] = {{"dx", "1e-9"},
+    ljgap__param q[5] = {{"dx", "1e-9"},
                         {"periodic", NULL},
                         {"E_star", "1e11"},
                         {"dgamma", "0.05"},
@@ -439,7 +439,7 @@ static void honest_over_maps(void **state)
     s.D = 2.3;
     s.C = realsurf_level(s.D, 2 * M_PI / (HN * HDX), M_PI / HDX, 0.3e-9 * 0.3e-9);
     for (int m = 0; m < HMAPS; m++) {
-        ljgap_reply r;
+        ljgap__reply r;
         cJSON *ans, *psd, *req, *mat, *a;
         char *t, *body;
         int st;
@@ -458,13 +458,13 @@ static void honest_over_maps(void **state)
         t = map_text(h);
         /* windowed: without "periodic" */
         {
-            ljgap_param qq[5] = {q[0], q[2], q[3], q[4], q[1]};
-            ljgap_handle_text("psd", windowed ? qq : q, windowed ? 4 : 5, t, strlen(t), NULL, &r);
+            ljgap__param qq[5] = {q[0], q[2], q[3], q[4], q[1]};
+            ljgap__handle_text("psd", windowed ? qq : q, windowed ? 4 : 5, t, strlen(t), NULL, &r);
         }
         free(t);
         assert_int_equal(r.status, 200);
         ans = cJSON_ParseWithLength(r.body, r.len);
-        ljgap_reply_free(&r);
+        ljgap__reply_free(&r);
         assert_non_null(ans);
         psd = cJSON_DetachItemFromObjectCaseSensitive(ans, "psd");
         assert_true(cJSON_IsObject(psd) && cJSON_HasObjectItem(psd, "P_corr"));

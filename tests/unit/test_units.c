@@ -5,7 +5,7 @@
  * (m̃0 = m0/ε²), and E* of two bodies. Contact: Maugis-Dugdale tends to JKR (1.5) as λ -> ∞
  * and to DMT (2) as λ -> 0 to 1e-3, decreases monotonically in between, and the forces of
  * ljgap_contact_compute follow their formulas, with λ = 1.16μ for the smooth law. The SI forms
- * of whole results (ljgap_si_*) give the numbers the server answered before they existed (the
+ * of whole results (ljgap__si_*) give the numbers the server answered before they existed (the
  * handler then converted field by field): the Fig. 4 spectrum's adhesion, traction and PDF with
  * E* = 1 GPa, Δγ = 0.05 J/m², ε = 0.3 nm; errors scale with their values, and the PDF's L1
  * error of the density, a pure number, is unchanged.

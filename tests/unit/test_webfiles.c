@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const ljgap_web_file *find_name(const char *name)
+static const ljgapd_web_file *find_name(const char *name)
 {
     for (size_t i = 0; i < ljgapd_web_nfiles; i++)
         if (strcmp(ljgapd_web_files[i].name, name) == 0) return &ljgapd_web_files[i];
@@ -29,7 +29,7 @@ static const ljgap_web_file *find_name(const char *name)
 
 static void test_page_has_what_it_loads(void **state)
 {
-    const ljgap_web_file *index = find_name("index.html");
+    const ljgapd_web_file *index = find_name("index.html");
     char *html;
     int refs = 0;
     (void)state;
@@ -71,7 +71,7 @@ static void test_entries_are_the_files(void **state)
     (void)state;
     assert_true(ljgapd_web_nfiles > 0);
     for (size_t i = 0; i < ljgapd_web_nfiles; i++) {
-        const ljgap_web_file *f = &ljgapd_web_files[i];
+        const ljgapd_web_file *f = &ljgapd_web_files[i];
         char path[300];
         FILE *in;
         unsigned char *buf = malloc(f->len + 1);
@@ -84,7 +84,7 @@ static void test_entries_are_the_files(void **state)
         if (got != f->len || memcmp(buf, f->data, f->len) != 0)
             fail_msg("%s: the compiled-in bytes differ from web/%s", f->name, f->name);
         free(buf);
-        assert_string_equal(f->type, ljgap_web_type(f->name));
+        assert_string_equal(f->type, ljgapd_web_type(f->name));
         assert_int_equal(strlen(f->etag), 18);
         assert_true(f->etag[0] == '"' && f->etag[17] == '"');
         assert_int_equal(strspn(f->etag + 1, "0123456789abcdef"), 16);
@@ -106,7 +106,7 @@ static void test_no_file_left_out(void **state)
         while ((e = readdir(dir))) {
             char rel[300];
             snprintf(rel, sizeof rel, "%s%s", d ? "vendor/" : "", e->d_name);
-            if (!ljgap_web_type(rel) || strncmp(e->d_name, "package", 7) == 0) continue;
+            if (!ljgapd_web_type(rel) || strncmp(e->d_name, "package", 7) == 0) continue;
             if (!find_name(rel)) fail_msg("web/%s could be served but is not compiled in", rel);
         }
         closedir(dir);
@@ -131,34 +131,34 @@ static void test_lookup(void **state)
         "/package.json",
     };
     (void)state;
-    assert_string_equal(ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/")->name,
+    assert_string_equal(ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/")->name,
                         "index.html");
-    assert_string_equal(ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/index.html")->name,
+    assert_string_equal(ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/index.html")->name,
                         "index.html");
     assert_string_equal(
-        ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/vendor/uPlot.min.css")->type,
+        ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/vendor/uPlot.min.css")->type,
         "text/css; charset=utf-8");
-    assert_string_equal(ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/favicon.ico")->type,
+    assert_string_equal(ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, "/favicon.ico")->type,
                         "image/x-icon");
     for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++)
-        if (ljgap_web_find(ljgapd_web_files, ljgapd_web_nfiles, refused[i]))
+        if (ljgapd_web_find(ljgapd_web_files, ljgapd_web_nfiles, refused[i]))
             fail_msg("\"%s\" was served", refused[i]);
-    assert_null(ljgap_web_type("vendor/../app.js"));
-    assert_null(ljgap_web_type("index.htm"));
+    assert_null(ljgapd_web_type("vendor/../app.js"));
+    assert_null(ljgapd_web_type("index.htm"));
 }
 
 static void test_etag_match(void **state)
 {
     const char *tag = "\"0123456789abcdef\"";
     (void)state;
-    assert_false(ljgap_web_etag_match(NULL, tag));
-    assert_true(ljgap_web_etag_match("\"0123456789abcdef\"", tag));
-    assert_true(ljgap_web_etag_match("*", tag));
-    assert_true(ljgap_web_etag_match("\"x\", W/\"0123456789abcdef\" ", tag));
-    assert_true(ljgap_web_etag_match(" \"a\",\"0123456789abcdef\"", tag));
-    assert_false(ljgap_web_etag_match("\"0123456789abcdee\"", tag));
-    assert_false(ljgap_web_etag_match("0123456789abcdef", tag));
-    assert_false(ljgap_web_etag_match("", tag));
+    assert_false(ljgapd_web_etag_match(NULL, tag));
+    assert_true(ljgapd_web_etag_match("\"0123456789abcdef\"", tag));
+    assert_true(ljgapd_web_etag_match("*", tag));
+    assert_true(ljgapd_web_etag_match("\"x\", W/\"0123456789abcdef\" ", tag));
+    assert_true(ljgapd_web_etag_match(" \"a\",\"0123456789abcdef\"", tag));
+    assert_false(ljgapd_web_etag_match("\"0123456789abcdee\"", tag));
+    assert_false(ljgapd_web_etag_match("0123456789abcdef", tag));
+    assert_false(ljgapd_web_etag_match("", tag));
 }
 
 int main(void)

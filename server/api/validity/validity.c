@@ -10,7 +10,7 @@
  * gives the nearest point's values as "at" says, never a silent extrapolation.
  */
 #include "validity.h"
-#include "clock.h" /* ljgap_clock_now */
+#include "clock.h" /* ljgap__clock_now */
 #include "ljgap_validity.h"
 
 #include <stddef.h>
@@ -30,9 +30,9 @@ static cJSON *num(double v)
  * points the interpolation's last bits say nothing) */
 static void triple(job *j, cJSON *parent, const char *key, const double *x)
 {
-    cJSON *o = ljgap_ans_put(j, parent, key, cJSON_CreateObject());
+    cJSON *o = ljgap__ans_put(j, parent, key, cJSON_CreateObject());
     for (int q = 0; o && q < LJGAP_V_N; q++)
-        ljgap_ans_put(j, o, ljgap_validity_quantities[q], num(round(x[q] * 1e6) / 1e6));
+        ljgap__ans_put(j, o, ljgap_validity_quantities[q], num(round(x[q] * 1e6) / 1e6));
 }
 
 /* k2/k1 as the contract writes it: null for ∞ */
@@ -42,11 +42,11 @@ static cJSON *ratio(double r)
 }
 
 /* The map's verdict on spec into *v; 0 when there is none (the reason in v->reason). */
-static int verdict(const ljgap_psd_spec *spec, ljgap_validity *v)
+static int verdict(const ljgap__psd_spec *spec, ljgap_validity *v)
 {
     ljgap_psd psd;
     memset(v, 0, sizeof *v);
-    if (ljgap_psd_from_spec(&psd, spec)) {
+    if (ljgap__psd_from_spec(&psd, spec)) {
         snprintf(v->reason, sizeof v->reason, "the PSD could not be formed");
         return 0;
     }
@@ -59,32 +59,32 @@ static int verdict(const ljgap_psd_spec *spec, ljgap_validity *v)
 /* The model object of v (ok: v holds the map's values) into parent.model. */
 static void put_model(job *j, cJSON *parent, const ljgap_validity *v, int ok)
 {
-    cJSON *m = ljgap_ans_put(j, parent, "model", cJSON_CreateObject()), *at;
+    cJSON *m = ljgap__ans_put(j, parent, "model", cJSON_CreateObject()), *at;
     if (!m) return;
     if (ok) {
         triple(j, m, "vs_discrete", v->rel);
         triple(j, m, "vs_discrete_err", v->err);
     } else {
-        ljgap_ans_put(j, m, "vs_discrete", cJSON_CreateNull());
-        ljgap_ans_put(j, m, "vs_discrete_err", cJSON_CreateNull());
+        ljgap__ans_put(j, m, "vs_discrete", cJSON_CreateNull());
+        ljgap__ans_put(j, m, "vs_discrete_err", cJSON_CreateNull());
     }
-    ljgap_ans_put(j, m, "source", cJSON_CreateString("validity map"));
-    ljgap_ans_put(j, m, "inside", cJSON_CreateBool(ok && v->inside));
+    ljgap__ans_put(j, m, "source", cJSON_CreateString("validity map"));
+    ljgap__ans_put(j, m, "inside", cJSON_CreateBool(ok && v->inside));
     if (ok) {
-        ljgap_ans_put(j, m, "bound", cJSON_CreateBool(v->bound));
-        ljgap_ans_put(j, m, "D", num(v->D));
-        ljgap_ans_put(j, m, "m0", num(v->m0));
-        ljgap_ans_put(j, m, "k1", num(v->k1));
-        ljgap_ans_put(j, m, "k2_over_k1", ratio(v->k2_over_k1));
-        at = ljgap_ans_put(j, m, "at", cJSON_CreateObject());
+        ljgap__ans_put(j, m, "bound", cJSON_CreateBool(v->bound));
+        ljgap__ans_put(j, m, "D", num(v->D));
+        ljgap__ans_put(j, m, "m0", num(v->m0));
+        ljgap__ans_put(j, m, "k1", num(v->k1));
+        ljgap__ans_put(j, m, "k2_over_k1", ratio(v->k2_over_k1));
+        at = ljgap__ans_put(j, m, "at", cJSON_CreateObject());
         if (at) {
-            ljgap_ans_put(j, at, "D", num(v->at_D));
-            ljgap_ans_put(j, at, "m0", num(v->at_m0));
-            ljgap_ans_put(j, at, "k2_over_k1", ratio(v->at_k2_over_k1));
+            ljgap__ans_put(j, at, "D", num(v->at_D));
+            ljgap__ans_put(j, at, "m0", num(v->at_m0));
+            ljgap__ans_put(j, at, "k2_over_k1", ratio(v->at_k2_over_k1));
         }
-        ljgap_ans_put(j, m, "method", cJSON_CreateString(v->method));
+        ljgap__ans_put(j, m, "method", cJSON_CreateString(v->method));
     }
-    if (!ok || !v->inside) ljgap_ans_put(j, m, "reason", cJSON_CreateString(v->reason));
+    if (!ok || !v->inside) ljgap__ans_put(j, m, "reason", cJSON_CreateString(v->reason));
 }
 
 /* The largest |rel| of v and its quantity. */
@@ -101,7 +101,7 @@ static const char *const HYBRID = "for a better number run the hybrid, a simulat
                                   "k_split (docs/model.md)";
 
 /* The model into the answer and into its "si" (when there is one), and the warning. */
-void ljgap_ans_model(job *j, const ljgap_psd_spec *spec)
+void ljgap__ans_model(job *j, const ljgap__psd_spec *spec)
 {
     ljgap_validity v;
     int ok = verdict(spec, &v), q;
@@ -122,7 +122,7 @@ void ljgap_ans_model(job *j, const ljgap_psd_spec *spec)
                    100 * v.rel[q], ljgap_validity_quantities[q], HYBRID);
 }
 
-void ljgap_ans_model_sweep(job *j)
+void ljgap__ans_model_sweep(job *j)
 {
     cJSON *res = cJSON_GetObjectItemCaseSensitive(j->ans, "results");
     cJSON *si = cJSON_GetObjectItemCaseSensitive(j->ans, "si");
@@ -132,11 +132,11 @@ void ljgap_ans_model_sweep(job *j)
     double big = 0;
     int bigq = 0;
     for (size_t i = 0; i < j->rq.nx; i++) {
-        ljgap_psd_spec spec;
+        ljgap__psd_spec spec;
         ljgap_validity v;
         cJSON *r = cJSON_GetArrayItem(res, (int)i), *s = cJSON_GetArrayItem(sir, (int)i);
         int q, ok;
-        ljgap_request_sweep_spec(&j->rq, i, &spec);
+        ljgap__request_sweep_spec(&j->rq, i, &spec);
         ok = verdict(&spec, &v);
         if (cJSON_IsObject(r)) put_model(j, r, &v, ok);
         if (cJSON_IsObject(s)) put_model(j, s, &v, ok);
@@ -172,64 +172,64 @@ static cJSON *axis(job *j, cJSON *parent, const char *key, size_t off)
         memmove(seen + i + 1, seen + i, (n - i) * sizeof *seen);
         seen[i] = v, n++;
     }
-    cJSON *a = ljgap_ans_put(j, parent, key, cJSON_CreateArray());
+    cJSON *a = ljgap__ans_put(j, parent, key, cJSON_CreateArray());
     for (size_t i = 0; a && i < n; i++)
-        ljgap_ans_put(j, a, NULL, ratio(seen[i]));
+        ljgap__ans_put(j, a, NULL, ratio(seen[i]));
     return a;
 }
 
-void ljgap_validity_answer(job *j)
+void ljgap__validity_answer(job *j)
 {
-    cJSON *map = ljgap_ans_put(j, j->ans, "map", cJSON_CreateObject()), *q, *rows, *how;
+    cJSON *map = ljgap__ans_put(j, j->ans, "map", cJSON_CreateObject()), *q, *rows, *how;
     if (!map) return;
-    q = ljgap_ans_put(j, map, "quantities", cJSON_CreateArray());
+    q = ljgap__ans_put(j, map, "quantities", cJSON_CreateArray());
     for (int i = 0; q && i < LJGAP_V_N; i++)
-        ljgap_ans_put(j, q, NULL, cJSON_CreateString(ljgap_validity_quantities[i]));
+        ljgap__ans_put(j, q, NULL, cJSON_CreateString(ljgap_validity_quantities[i]));
     axis(j, map, "D", offsetof(ljgap_validity_row, D));
     axis(j, map, "m0", offsetof(ljgap_validity_row, m0));
     axis(j, map, "k2_over_k1", offsetof(ljgap_validity_row, k2_over_k1));
-    ljgap_ans_put(j, map, "k1", cJSON_CreateNumber(1));
-    rows = ljgap_ans_put(j, map, "rows", cJSON_CreateArray());
+    ljgap__ans_put(j, map, "k1", cJSON_CreateNumber(1));
+    rows = ljgap__ans_put(j, map, "rows", cJSON_CreateArray());
     for (size_t r = 0; rows && r < ljgap_validity_nrows; r++) {
         const ljgap_validity_row *w = &ljgap_validity_rows[r];
-        cJSON *o = ljgap_ans_put(j, rows, NULL, cJSON_CreateObject());
+        cJSON *o = ljgap__ans_put(j, rows, NULL, cJSON_CreateObject());
         if (!o) break;
-        ljgap_ans_put(j, o, "k2_over_k1", ratio(w->k2_over_k1));
-        ljgap_ans_put(j, o, "D", cJSON_CreateNumber(w->D));
-        ljgap_ans_put(j, o, "m0", cJSON_CreateNumber(w->m0));
+        ljgap__ans_put(j, o, "k2_over_k1", ratio(w->k2_over_k1));
+        ljgap__ans_put(j, o, "D", cJSON_CreateNumber(w->D));
+        ljgap__ans_put(j, o, "m0", cJSON_CreateNumber(w->m0));
         triple(j, o, "vs_discrete", w->rel);
         triple(j, o, "vs_discrete_err", w->err);
         triple(j, o, "L_bias", w->L_bias);
         if (isfinite(w->hyb2[0])) triple(j, o, "hybrid_k_split_2", w->hyb2);
         if (isfinite(w->hyb4[0])) triple(j, o, "hybrid_k_split_4", w->hyb4);
     }
-    how = ljgap_ans_put(j, j->ans, "how", cJSON_CreateObject());
+    how = ljgap__ans_put(j, j->ans, "how", cJSON_CreateObject());
     if (!how) return;
-    ljgap_ans_put(j, how, "command", cJSON_CreateString(ljgap_validity_how.command));
-    ljgap_ans_put(j, how, "discretisation", cJSON_CreateString(ljgap_validity_how.discretisation));
-    ljgap_ans_put(j, how, "realizations", cJSON_CreateNumber(ljgap_validity_how.realizations));
-    ljgap_ans_put(j, how, "convergence", cJSON_CreateString(ljgap_validity_how.convergence));
-    ljgap_ans_put(j, how, "continuum", cJSON_CreateString(ljgap_validity_how.continuum));
-    ljgap_ans_put(j, how, "interpolation",
+    ljgap__ans_put(j, how, "command", cJSON_CreateString(ljgap_validity_how.command));
+    ljgap__ans_put(j, how, "discretisation", cJSON_CreateString(ljgap_validity_how.discretisation));
+    ljgap__ans_put(j, how, "realizations", cJSON_CreateNumber(ljgap_validity_how.realizations));
+    ljgap__ans_put(j, how, "convergence", cJSON_CreateString(ljgap_validity_how.convergence));
+    ljgap__ans_put(j, how, "continuum", cJSON_CreateString(ljgap_validity_how.continuum));
+    ljgap__ans_put(j, how, "interpolation",
                   cJSON_CreateString("linear in D, in ln m0 and in (k1/k2)^(2(3-D)) (the continuum "
                                      "at 0) between the map's points; exact at them"));
 }
 
-void ljgap_validity_reply(ljgap_reply *out)
+void ljgap__validity_reply(ljgap__reply *out)
 {
     static job proto; /* zero: no request, no warnings */
     job j = proto;
-    double t0 = ljgap_clock_now();
+    double t0 = ljgap__clock_now();
     memset(out, 0, sizeof *out);
     j.rq.method = "validity map";
     j.ans = cJSON_CreateObject();
     if (j.ans) {
-        ljgap_validity_answer(&j);
-        ljgap_ans_meta(&j, t0);
+        ljgap__validity_answer(&j);
+        ljgap__ans_meta(&j, t0);
     }
     if (!j.ans || j.oom)
-        ljgap_ans_oom(out);
+        ljgap__ans_oom(out);
     else
-        ljgap_ans_reply_json(out, 200, CT_JSON, j.ans);
+        ljgap__ans_reply_json(out, 200, CT_JSON, j.ans);
     cJSON_Delete(j.ans);
 }
