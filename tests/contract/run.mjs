@@ -184,6 +184,10 @@ async function computations() {
     { status: 415, type: "/problems/unsupported-media-type" });
   report(/nanoscope/.test(unknown.json?.detail || ""), "the 415 of an unknown file lists the formats read");
   check("a channel the file does not have", "POST", "/v1/psd?channel=Phase", await call("POST", "/v1/psd?channel=Phase", { headers: OCTET, body: file }), { status: 422, type: "/problems/validation" });
+  // a format's own media type is taken like octet-stream (the seed file's short profile has no power-law spectrum: 422 outside-model, not 415)
+  const nc = readFileSync(new URL("../fuzz/files_corpus/nc_valid.nc", import.meta.url));
+  check("a netCDF file as application/netcdf", "POST", "/v1/psd", await call("POST", "/v1/psd", { headers: { "Content-Type": "application/netcdf" }, body: nc }),
+    { status: 422, type: "/problems/outside-model" });
   check("dx beside a file that states its size", "POST", "/v1/psd?dx=1e-9", await call("POST", "/v1/psd?dx=1e-9", { headers: OCTET, body: file }), { status: 422, type: "/problems/validation" });
   // a cached answer (the same request again)
   const body = compute["/v1/adhesion"][0][1];
