@@ -578,9 +578,9 @@ static int profile_convert(ljgap_topo_result *r, size_t lo, size_t hi, int fix_l
     r->alpha.err = 2 * f1.D.err;
     if (!(r->alpha.value > TOPO_ALPHA_MIN) || !isfinite(r->alpha.value)) {
         ljgap_warn(w,
-                   "topography: the profile's spectrum falls as k^-%.3g; the conversion to an "
+                   "topography: the profile's spectrum goes as k^%.3g; the conversion to an "
                    "isotropic PSD needs a decay faster than k^-%g (a 2-D PSD steeper than k^-1)",
-                   r->alpha.value, TOPO_ALPHA_MIN);
+                   -r->alpha.value, TOPO_ALPHA_MIN);
         return LJGAP_EINVAL;
     }
     double F = ljgap_topo_abel_factor(r->alpha.value);
