@@ -171,6 +171,10 @@ int ljgap_topo_table(const ljgap_topo_result *r, double k_from, double tail_q, l
     for (size_t j = 0; j < mm; j++) {
         t->k[j] = K[j];
         t->P[j] = exp(V[j]);
+        if (!(t->P[j] > 0) || !isfinite(t->P[j])) { /* a bin without power (a constant map, an */
+            st = LJGAP_EINVAL;                        /* underflow): no table the PSD calls take */
+            goto end;
+        }
     }
     if (tab_errors(r, first, K, V, mm, idx0, nb, lead, trail, s_end, blo, bhi, t->P_err, t->corr))
         goto end;

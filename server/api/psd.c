@@ -113,8 +113,9 @@ static void put_psd_object(job *j, const ljgap_topo_result *r, double k_from, do
     } else {
         ljgap__ans_put(j, j->ans, "psd", cJSON_CreateNull());
         ljgap_warn(&j->rq.warn,
-                   "no psd object: no reliable bin lies above k = %g 1/m and the "
-                   "fit gives no sound power law with 2 < D < 3 to extrapolate",
+                   "no psd object: the reliable bins above k = %g 1/m form no table (there "
+                   "are none, or one carries no power) and the fit gives no sound power law "
+                   "with 2 < D < 3 to extrapolate",
                    k_from);
     }
     ljgap_topo_tab_free(&t);
