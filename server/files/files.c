@@ -94,6 +94,20 @@ static int is_height_title(const char *t)
     return 0;
 }
 
+/* The height channel among map->channels: the first title that starts with Height, else
+ * Topography, else ZSensor (Asylum's layers, in that order of preference), else the first that
+ * names a height (is_height_title), else channel 0. */
+static int height_channel(const ljgap__files_map *map)
+{
+    static const char *const prefixes[] = {"Height", "Topography", "ZSensor"};
+    for (size_t p = 0; p < sizeof prefixes / sizeof prefixes[0]; p++)
+        for (int i = 0; i < map->n_channels; i++)
+            if (!strncasecmp(map->channels[i], prefixes[p], strlen(prefixes[p]))) return i;
+    for (int i = 0; i < map->n_channels; i++)
+        if (is_height_title(map->channels[i])) return i;
+    return 0;
+}
+
 int ljgap__files_channel_pick(const ljgap__files_map *map, const char *channel, ljgap__files_err *err)
 {
     char list[LJGAP_FILES_MAX_CHANNELS * 24] = "";
@@ -102,15 +116,13 @@ int ljgap__files_channel_pick(const ljgap__files_map *map, const char *channel, 
         set_err(err, map->format, "%s", "the file holds no channel of data");
         return -1;
     }
-    if (!channel || !*channel) {
-        for (int i = 0; i < map->n_channels; i++)
-            if (is_height_title(map->channels[i])) return i;
-        return 0;
-    }
+    if (!channel || !*channel) return height_channel(map);
     if (strspn(channel, "0123456789") == strlen(channel) && strlen(channel) < 6) {
         int i = atoi(channel);
         if (i < map->n_channels) return i;
     } else {
+        for (int i = 0; i < map->n_channels; i++) /* the exact title first, then any case */
+            if (strcmp(map->channels[i], channel) == 0) return i;
         for (int i = 0; i < map->n_channels; i++)
             if (strcasecmp(map->channels[i], channel) == 0) return i;
     }
@@ -132,23 +144,23 @@ double ljgap__files_unit_scale(const char *unit)
     static const struct {
         const char *name;
         double scale;
-    } units[] = {{"m", 1},
-                 {"mm", 1e-3},
-                 {"um", 1e-6},
-                 {"~m", 1e-6},
-                 {"\xc2\xb5m", 1e-6},
-                 {"\xb5m", 1e-6},
-                 {"micron", 1e-6},
-                 {"microns", 1e-6},
-                 {"nm", 1e-9},
-                 {"pm", 1e-12},
-                 {"A", 1e-10},
-                 {"\xc3\x85", 1e-10},
-                 {"angstrom", 1e-10},
-                 {"km", 1e3},
-                 {"cm", 1e-2}};
+    } units[] = {{"m", 1},          {"mm", 1e-3},        {"um", 1e-6},        {"~m", 1e-6},
+                 {"\xc2\xb5m", 1e-6}, {"\xb5m", 1e-6},   {"\xce\xbcm", 1e-6}, {"micron", 1e-6},
+                 {"microns", 1e-6}, {"nm", 1e-9},        {"pm", 1e-12},       {"A", 1e-10},
+                 {"\xc3\x85", 1e-10}, {"\xc5", 1e-10},   {"angstrom", 1e-10}, {"Angstrom", 1e-10},
+                 {"km", 1e3},       {"cm", 1e-2},        {"dm", 1e-1},        {"meter", 1},
+                 {"meters", 1},     {"metre", 1},        {"metres", 1}};
+    char u[32];
+    size_t n = 0;
+    while (*unit == ' ' || *unit == '\t') /* surrounding blanks ignored */
+        unit++;
+    while (unit[n] && n < sizeof u - 1)
+        u[n] = unit[n], n++;
+    while (n && (u[n - 1] == ' ' || u[n - 1] == '\t'))
+        n--;
+    u[n] = '\0';
     for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
-        if (strcmp(unit, units[i].name) == 0) return units[i].scale;
+        if (strcmp(u, units[i].name) == 0) return units[i].scale;
     return 0;
 }
 

@@ -90,9 +90,11 @@ const ljgap__files_format *ljgap__files_find(const char *name);
 const ljgap__files_format *ljgap__files_detect(const unsigned char *buf, size_t len);
 /* "name (extensions), ..." of every format read, into out (for 415 details and --help). */
 void ljgap__files_names(char *out, size_t size);
-/* The channel a request names (NULL or "": the height channel, by a title such as Height,
- * Topography, ZSensor; else channel 0), among map->channels: its index, or -1 with err->msg
- * listing the channels. Readers call it once their titles are in map->channels. */
+/* The channel a request names among map->channels: NULL or "" the height channel (the first
+ * title starting with Height, else Topography, else ZSensor, else one naming a height such as
+ * "Z sensor" or "Surface"; else channel 0), digits an index, else a title (exactly, then
+ * ignoring case). Its index, or -1 with err->msg listing the channels (then the reader answers
+ * LJGAP_FILES_CHANNEL). Readers call it once their titles are in map->channels. */
 int ljgap__files_channel_pick(const ljgap__files_map *map, const char *channel,
                              ljgap__files_err *err);
 /* Counts the NaN of map->z into map->missing (and returns it). */
@@ -102,8 +104,9 @@ size_t ljgap__files_count_missing(ljgap__files_map *map);
 int ljgap__files_largest_rect(const ljgap__files_map *map, size_t *x0, size_t *y0, size_t *w,
                              size_t *h);
 
-/* The factor from a length unit ("m", "mm", "um", "µm", "~m", "nm", "pm", "A", ...) to
- * metres, 0 when unit is not a length. */
+/* The factor from a length unit ("m", "mm", "um", "µm" in UTF-8 or Latin-1, "~m", "micron",
+ * "nm", "pm", "A", "Å", "km", "cm", "metre"...; surrounding blanks ignored) to metres, 0 when
+ * unit is not a length. */
 double ljgap__files_unit_scale(const char *unit);
 
 #endif

@@ -1,6 +1,7 @@
-/* files_util.h -- what the readers of server/files/ share (files_util.c), besides bytes.h: the
- * message of a failure, the map's allocation, channel titles. Not for the request layer
- * (files.h is its interface).
+/* files_util.h -- what the readers of server/files/ share (files_util.c), besides bytes.h and
+ * files.h's channel choice and length units: the report of a failure, the map's start and
+ * allocation, a height's storing, channel titles and texts. Not for the request layer (files.h
+ * is its interface).
  */
 #ifndef LJGAP_FILES_UTIL_H
 #define LJGAP_FILES_UTIL_H
@@ -12,12 +13,27 @@
 /* Fills err (format, offset or -1, member or NULL, a printf message); returns LJGAP_FILES_BAD. */
 int ljgap__files_fail(ljgap__files_err *err, const char *format, long offset, const char *member,
                      const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+/* The same with any code (LJGAP_FILES_CHANNEL, TOOBIG, NOMEM...): returns code; err may be NULL. */
+int ljgap__files_report(ljgap__files_err *err, int code, const char *format, long offset,
+                       const char *member, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
+/* Clears the map and names its reader (every field the reader does not set stays 0 or ""). */
+void ljgap__files_map_init(ljgap__files_map *map, const char *format);
 /* map->z for nx x ny points (map->nx, ny set): 0, LJGAP_FILES_BAD (an empty map),
- * LJGAP_FILES_TOOBIG (over LJGAP_FILES_MAX_POINTS) or LJGAP_FILES_NOMEM. */
+ * LJGAP_FILES_TOOBIG (over LJGAP_FILES_MAX_POINTS) or LJGAP_FILES_NOMEM; a failure's offset is
+ * -1 (ljgap__files_alloc) or offset, where the file states the size (ljgap__files_alloc_at). */
 int ljgap__files_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err);
+int ljgap__files_alloc_at(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err,
+                         long offset);
+/* Stores a height at map->z[k]: a non-finite value is a missing point (NaN, counted). */
+void ljgap__files_put(ljgap__files_map *map, size_t k, double v);
 /* Appends a channel title (at most LJGAP_FILES_MAX_CHANNELS are kept). */
 void ljgap__files_add_channel(ljgap__files_map *map, const char *title);
 /* s[0..n) into out, trimmed, bytes outside printable ASCII as '?'. */
 void ljgap__files_text(char *out, size_t size, const char *s, size_t n);
+/* A text field of at most n bytes at p (it ends at a NUL) into out as valid UTF-8: UTF-8
+ * sequences are kept, any other byte above 0x7f is taken as Latin-1 (what older writers use),
+ * control characters become '?'; at most size - 1 bytes, no sequence cut, leading blanks and
+ * trailing blanks and '?' cut. */
+void ljgap__files_utf8(const unsigned char *p, size_t n, char *out, size_t size);
 
 #endif

@@ -37,7 +37,6 @@
  * NaN heights (Igor's blanks) are missing points. Complex and text waves are refused.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +44,7 @@
 
 #include "bytes.h"
 #include "files.h"
+#include "files_util.h"
 
 #define NAME "ibw"
 #define BIN5 64     /* BinHeader5 */
@@ -53,15 +53,8 @@
 #define LABEL 32    /* one dimension label */
 #define NOTE_MAX 64 /* the longest note value kept */
 
-static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
-    err->format = NAME, err->offset = offset, err->member[0] = 0;
-    return LJGAP_FILES_BAD;
-}
+/* A fault at a byte offset (files_util.h). */
+#define bad(err, offset, ...) ljgap__files_fail(err, NAME, offset, NULL, __VA_ARGS__)
 
 /* The size of the binary header of a version, 0 for an unknown one. */
 static size_t bin_size(unsigned v)
@@ -105,86 +98,11 @@ static int ibw_probe(const unsigned char *buf, size_t len)
     return checksum(buf, len, head, be) == 0 || checksum(buf, len, head + 16, be) == 0;
 }
 
-/* The factor to metres of a length unit ("m", "nm", "um", "µm", "Å"..., as text_copy gives
- * them: UTF-8), 0 for anything else. */
-static double length_factor(const char *u)
-{
-    static const struct {
-        const char *unit;
-        double f;
-    } units[] = {{"m", 1},         {"cm", 1e-2},        {"mm", 1e-3},
-                 {"um", 1e-6},     {"\xc2\xb5m", 1e-6}, {"\xce\xbcm", 1e-6},
-                 {"micron", 1e-6}, {"nm", 1e-9},        {"pm", 1e-12},
-                 {"A", 1e-10},     {"\xc3\x85", 1e-10}, {"Angstrom", 1e-10}};
-    for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
-        if (!strcmp(u, units[i].unit)) return units[i].f;
-    return 0;
-}
-
-/* The index of the channel a query names: NULL or "" the default, digits an index, else a
- * title (exactly, then ignoring case); -1 when there is none. */
-static int pick_channel(const char *channel, char titles[][LJGAP_FILES_TEXT], int n, int def)
-{
-    if (!channel || !*channel) return def;
-    size_t k = strspn(channel, "0123456789");
-    if (!channel[k] && k <= 4) {
-        int i = atoi(channel);
-        return i < n ? i : -1;
-    }
-    for (int i = 0; i < n; i++)
-        if (!strcmp(channel, titles[i])) return i;
-    for (int i = 0; i < n; i++)
-        if (!strcasecmp(channel, titles[i])) return i;
-    return -1;
-}
-
-/* The height channel among the titles: the first Height*, else Topography*, else ZSensor*. */
-static int height_channel(char titles[][LJGAP_FILES_TEXT], int n)
-{
-    static const char *const prefixes[] = {"Height", "Topography", "ZSensor"};
-    for (size_t p = 0; p < sizeof prefixes / sizeof prefixes[0]; p++)
-        for (int i = 0; i < n; i++)
-            if (!strncasecmp(titles[i], prefixes[p], strlen(prefixes[p]))) return i;
-    return 0;
-}
-
-/* Copies a text of at most n bytes at p (it ends at a NUL) into out as valid UTF-8: UTF-8
- * sequences are kept, any other byte above 0x7f is taken as Latin-1 (what older writers use),
- * control characters become '?'; at most size - 1 bytes, no sequence cut, trailing blanks cut. */
-static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
-{
-    size_t i = 0, k = 0;
-    while (i < n && p[i]) {
-        unsigned char c = p[i], u[4];
-        size_t m = 1, take = 1;
-        if (c >= 0x80) {
-            size_t need = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : 0;
-            size_t j = 1;
-            while (need && j < need && i + j < n && (p[i + j] & 0xc0) == 0x80)
-                j++;
-            if (need && j == need && !(c == 0xe0 && p[i + 1] < 0xa0) &&
-                !(c == 0xed && p[i + 1] >= 0xa0)) {
-                memcpy(u, p + i, need), m = take = need;
-            } else {
-                u[0] = (unsigned char)(0xc0 | c >> 6), u[1] = (unsigned char)(0x80 | (c & 0x3f));
-                m = 2;
-            }
-        } else {
-            u[0] = c < 0x20 || c == 0x7f ? '?' : c;
-        }
-        if (k + m + 1 > size) break;
-        memcpy(out + k, u, m), k += m, i += take;
-    }
-    out[k] = 0;
-    while (k && (out[k - 1] == ' ' || out[k - 1] == '?'))
-        out[--k] = 0;
-}
-
 /* A NUL-padded field of n bytes at p, as text. */
 static void field(const unsigned char *p, size_t n, char *out, size_t size)
 {
     if (p)
-        text_copy(p, n, out, size);
+        ljgap__files_utf8(p, n, out, size);
     else
         out[0] = 0;
 }
@@ -347,11 +265,9 @@ static int read_v5(ljgap__bytes *b, wave *w, ljgap__files_err *err)
         return bad(err, BIN5 + 12, "npnts %u is not the product of the dimensions", npnts);
     size_t ts = type_size(w->type);
     if (!ts) return bad(err, BIN5 + 16, "unsupported wave type 0x%x (text or complex)", w->type);
-    if ((uint64_t)w->n[0] * w->n[1] > LJGAP_FILES_MAX_POINTS) {
-        snprintf(err->msg, sizeof err->msg, "%zu x %zu points are too many", w->n[0], w->n[1]);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_TOOBIG;
-    }
+    if ((uint64_t)w->n[0] * w->n[1] > LJGAP_FILES_MAX_POINTS)
+        return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
+                                  "%zu x %zu points are too many", w->n[0], w->n[1]);
     if (wfm < WAVE5 || wfm - WAVE5 < (uint64_t)npnts * ts)
         return bad(err, 4, "wfmSize %u does not hold %u points", wfm, npnts);
 
@@ -408,11 +324,9 @@ static int read_v2(ljgap__bytes *b, wave *w, ljgap__files_err *err)
     size_t ts = type_size(w->type);
     if (!ts) return bad(err, (long)wh, "unsupported wave type 0x%x (text or complex)", w->type);
     if (npnts == 0) return bad(err, (long)wh + 42, "the wave has no points");
-    if (npnts > LJGAP_FILES_MAX_POINTS) {
-        snprintf(err->msg, sizeof err->msg, "%u points are too many", npnts);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_TOOBIG;
-    }
+    if (npnts > LJGAP_FILES_MAX_POINTS)
+        return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
+                                  "%u points are too many", npnts);
     if (wfm < WAVE2 + 16 || wfm - WAVE2 - 16 < (uint64_t)npnts * ts)
         return bad(err, 2, "wfmSize %u does not hold %u points", wfm, npnts);
     w->n[0] = npnts, w->n[1] = 1, w->n[2] = 1;
@@ -454,8 +368,7 @@ static void unit_key(const char *title, char *key, size_t size)
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
                      ljgap__files_map *map, ljgap__files_err *err)
 {
-    memset(map, 0, sizeof *map);
-    map->format = NAME;
+    ljgap__files_map_init(map, NAME);
     ljgap__bytes b;
     ljgap__bytes_init(&b, buf, len);
     wave w;
@@ -482,12 +395,8 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         }
     }
     map->n_channels = nch;
-    int ch = pick_channel(channel, map->channels, nch, height_channel(map->channels, nch));
-    if (ch < 0) {
-        snprintf(err->msg, sizeof err->msg, "no channel \"%s\" among the wave's %d", channel, nch);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_CHANNEL;
-    }
+    int ch = ljgap__files_channel_pick(map, channel, err);
+    if (ch < 0) return LJGAP_FILES_CHANNEL;
     map->channel_index = ch;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[ch]);
 
@@ -499,12 +408,12 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         snprintf(unit, sizeof unit, "%s",
                  implied && (w.note || !w.data_unit[0]) ? implied : w.data_unit);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", unit);
-    double q = length_factor(unit);
+    double q = ljgap__files_unit_scale(unit);
     if (q == 0) q = 1;
-    map->nx = w.n[0], map->ny = w.n[1];
+    size_t nx = w.n[0], ny = w.n[1];
     for (int i = 0; i < 2; i++) {
-        double s = 0, f = length_factor(w.dim_unit[i]);
-        if (i == 1 && map->ny == 1) continue; /* a profile has no y extent */
+        double s = 0, f = ljgap__files_unit_scale(w.dim_unit[i]);
+        if (i == 1 && ny == 1) continue; /* a profile has no y extent */
         if (f > 0) s = fabs(w.step[i]) * f * (double)w.n[i];
         if (!(isfinite(s) && s > 0))
             s = note_number(w.note, w.note_len, i ? "SlowScanSize" : "FastScanSize");
@@ -519,19 +428,13 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     acquired(w.note, w.note_len, w.created, map->acquired, sizeof map->acquired);
 
     /* the data, rows reversed (Igor's y grows with the index) */
-    map->z = malloc(map->nx * map->ny * sizeof *map->z);
-    if (!map->z) return LJGAP_FILES_NOMEM;
-    size_t ts = type_size(w.type), layer = map->nx * map->ny;
+    if ((rc = ljgap__files_alloc(map, nx, ny, err))) return rc;
+    size_t ts = type_size(w.type), layer = nx * ny;
     ljgap__bytes_seek(&b, w.data + (size_t)ch * layer * ts);
     for (size_t j = 0; j < map->ny; j++) {
-        double *row = map->z + (map->ny - 1 - j) * map->nx;
-        for (size_t i = 0; i < map->nx; i++) {
-            double x = value_at(&b, w.type, w.be);
-            if (isfinite(x))
-                row[i] = x * q;
-            else
-                row[i] = NAN, map->missing++;
-        }
+        size_t row = (map->ny - 1 - j) * map->nx;
+        for (size_t i = 0; i < map->nx; i++)
+            ljgap__files_put(map, row + i, value_at(&b, w.type, w.be) * q);
     }
     if (b.bad) { /* cannot happen: read_v5/read_v2 checked the extent; kept as a guard */
         free(map->z), map->z = NULL;

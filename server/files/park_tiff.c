@@ -26,13 +26,13 @@
  * "Park Systems" (the magic says so), or the Make and Model tags where present.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bytes.h"
 #include "files.h"
+#include "files_util.h"
 
 #define NAME "park-tiff"
 #define PARK_MAGIC 0x0E031301u
@@ -40,15 +40,8 @@
 #define PARK_V2 0x01000002u
 #define MAX_ENTRIES 4096 /* a directory longer than this is not a Park file's */
 
-static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
-    err->format = NAME, err->offset = offset, err->member[0] = 0;
-    return LJGAP_FILES_BAD;
-}
+/* A fault at a byte offset (files_util.h). */
+#define bad(err, offset, ...) ljgap__files_fail(err, NAME, offset, NULL, __VA_ARGS__)
 
 /* One tag of the first directory: where its value lies and how long it is. */
 typedef struct {
@@ -149,65 +142,18 @@ static void utf16(const unsigned char *p, size_t n, char *out, size_t size)
     out[k] = 0;
 }
 
-/* The factor to metres of a length unit, 0 for anything else. */
-static double length_factor(const char *u)
-{
-    static const struct {
-        const char *unit;
-        double f;
-    } units[] = {
-        {"m", 1},     {"mm", 1e-3},  {"um", 1e-6}, {"\xc2\xb5m", 1e-6}, {"\xce\xbcm", 1e-6},
-        {"nm", 1e-9}, {"pm", 1e-12}, {"A", 1e-10}, {"\xc3\x85", 1e-10}};
-    for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
-        if (!strcmp(u, units[i].unit)) return units[i].f;
-    return 0;
-}
-
-/* Copies a text of at most n bytes at p (it ends at a NUL) into out as valid UTF-8: UTF-8
- * sequences are kept, any other byte above 0x7f is taken as Latin-1 (what older writers use),
- * control characters become '?'; at most size - 1 bytes, no sequence cut, trailing blanks cut. */
-static void text_copy(const unsigned char *p, size_t n, char *out, size_t size)
-{
-    size_t i = 0, k = 0;
-    while (i < n && p[i]) {
-        unsigned char c = p[i], u[4];
-        size_t m = 1, take = 1;
-        if (c >= 0x80) {
-            size_t need = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : 0;
-            size_t j = 1;
-            while (need && j < need && i + j < n && (p[i + j] & 0xc0) == 0x80)
-                j++;
-            if (need && j == need && !(c == 0xe0 && p[i + 1] < 0xa0) &&
-                !(c == 0xed && p[i + 1] >= 0xa0)) {
-                memcpy(u, p + i, need), m = take = need;
-            } else {
-                u[0] = (unsigned char)(0xc0 | c >> 6), u[1] = (unsigned char)(0x80 | (c & 0x3f));
-                m = 2;
-            }
-        } else {
-            u[0] = c < 0x20 || c == 0x7f ? '?' : c;
-        }
-        if (k + m + 1 > size) break;
-        memcpy(out + k, u, m), k += m, i += take;
-    }
-    out[k] = 0;
-    while (k && (out[k - 1] == ' ' || out[k - 1] == '?'))
-        out[--k] = 0;
-}
-
 /* An ASCII tag's text (empty when the tag is absent or of another type). */
 static void tag_text(ljgap__bytes *b, const tiff_tag *g, char *out, size_t size)
 {
     const unsigned char *p = g->found && g->type == 2 ? ljgap__bytes_at(b, g->at, g->len) : NULL;
     out[0] = 0;
-    if (p) text_copy(p, g->len, out, size);
+    if (p) ljgap__files_utf8(p, g->len, out, size);
 }
 
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
                      ljgap__files_map *map, ljgap__files_err *err)
 {
-    memset(map, 0, sizeof *map);
-    map->format = NAME;
+    ljgap__files_map_init(map, NAME);
     ljgap__bytes b;
     ljgap__bytes_init(&b, buf, len);
     tiff_tag tags[T_N];
@@ -251,11 +197,9 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         return bad(err, (long)h + 100, "an image of %u x %u points", xres, yres);
     size_t bps = dtype == 0 ? 2 : dtype <= 2 ? 4 : 0;
     if (!bps) return bad(err, (long)h + 348, "unknown data type %u", dtype);
-    if ((uint64_t)xres * yres > LJGAP_FILES_MAX_POINTS) {
-        snprintf(err->msg, sizeof err->msg, "%u x %u points are too many", xres, yres);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_TOOBIG;
-    }
+    if ((uint64_t)xres * yres > LJGAP_FILES_MAX_POINTS)
+        return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
+                                  "%u x %u points are too many", xres, yres);
     if (td->len < (uint64_t)xres * yres * bps)
         return bad(err, (long)td->entry, "the data tag holds %zu bytes, %u x %u points need %llu",
                    td->len, xres, yres, (unsigned long long)xres * yres * bps);
@@ -271,13 +215,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     utf16(up, 8, unit, sizeof unit);
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "%s", title[0] ? title : "channel 0");
     map->n_channels = 1;
-    if (channel && *channel && strcmp(channel, "0") && strcmp(channel, map->channels[0]) &&
-        strcasecmp(channel, map->channels[0])) {
-        snprintf(err->msg, sizeof err->msg, "no channel \"%s\": the file holds \"%s\" only",
-                 channel, map->channels[0]);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_CHANNEL;
-    }
+    if (ljgap__files_channel_pick(map, channel, err) != 0) return LJGAP_FILES_CHANNEL;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[0]);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", unit);
     char make[LJGAP_FILES_TEXT / 2], model[LJGAP_FILES_TEXT / 2], dt[32];
@@ -296,24 +234,20 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         snprintf(map->acquired, sizeof map->acquired, "%04d-%02d-%02dT%02d:%02d:%02d", Y, M, D, hh,
                  mm, ss);
 
-    double f = length_factor(unit), q = gain * (f > 0 ? f : 1);
+    double f = ljgap__files_unit_scale(unit), q = gain * (f > 0 ? f : 1);
     double sx = fabs(xreal) * 1e-6, sy = fabs(yreal) * 1e-6;
-    map->z = malloc((size_t)xres * yres * sizeof *map->z);
-    if (!map->z) return LJGAP_FILES_NOMEM;
-    map->nx = xres, map->ny = yres, map->size_x = isfinite(sx) ? sx : 0;
+    int rc = ljgap__files_alloc(map, xres, yres, err);
+    if (rc) return rc;
+    map->size_x = isfinite(sx) ? sx : 0;
     map->size_y = isfinite(sy) ? sy : 0;
     ljgap__bytes_seek(&b, td->at);
     for (size_t j = 0; j < yres; j++) {
-        double *row = map->z + (yres - 1 - j) * (size_t)xres; /* bottom row first */
+        size_t row = (yres - 1 - j) * (size_t)xres; /* bottom row first */
         for (size_t i = 0; i < xres; i++) {
             double raw = dtype == 0   ? ljgap__bytes_i16(&b, 0)
                          : dtype == 1 ? ljgap__bytes_i32(&b, 0)
                                       : ljgap__bytes_f32(&b, 0);
-            double z = q * (raw * zscale + zoff);
-            if (isfinite(z))
-                row[i] = z;
-            else
-                row[i] = NAN, map->missing++;
+            ljgap__files_put(map, row + i, q * (raw * zscale + zoff));
         }
     }
     if (b.bad) { /* the walker checked the data tag's extent: a guard only */

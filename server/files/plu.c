@@ -23,27 +23,20 @@
  * (one row) has no y size.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bytes.h"
 #include "files.h"
+#include "files_util.h"
 
 #define NAME "plu"
 #define HEADER 500
 #define NO_DATA 1000001.0f
 
-static int bad(ljgap__files_err *err, long offset, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
-    err->format = NAME, err->offset = offset, err->member[0] = 0;
-    return LJGAP_FILES_BAD;
-}
+/* A fault at a byte offset (files_util.h). */
+#define bad(err, offset, ...) ljgap__files_fail(err, NAME, offset, NULL, __VA_ARGS__)
 
 /* Whether buf starts with a ctime() date, "Www Mmm dd hh:mm:ss yyyy" and a NUL; its parts in
  * the ISO 8601 form into iso (may be NULL). */
@@ -76,27 +69,12 @@ static int plu_probe(const unsigned char *buf, size_t len)
     return ctime_date(buf, len, NULL, 0);
 }
 
-/* The index of the channel a query names (see ibw.c), -1 when there is none. */
-static int pick_channel(const char *channel, char titles[][LJGAP_FILES_TEXT], int n)
-{
-    if (!channel || !*channel) return 0; /* layer 0: the topography */
-    size_t k = strspn(channel, "0123456789");
-    if (!channel[k] && k <= 4) {
-        int i = atoi(channel);
-        return i < n ? i : -1;
-    }
-    for (int i = 0; i < n; i++)
-        if (!strcasecmp(channel, titles[i])) return i;
-    return -1;
-}
-
 static int read_file(const unsigned char *buf, size_t len, const char *channel,
                      ljgap__files_map *map, ljgap__files_err *err)
 {
     static const char *const hardware[] = {"PLu", "PLu 2300 XGA", "PLu 2300 XGA T5",
                                            "PLu 2300 SXGA", "PLu 3300"};
-    memset(map, 0, sizeof *map);
-    map->format = NAME;
+    ljgap__files_map_init(map, NAME);
     if (!ctime_date(buf, len, map->acquired, sizeof map->acquired))
         return bad(err, 0, "the file does not start with a date (Sensofar PLu)");
     ljgap__bytes b;
@@ -122,13 +100,8 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     for (int c = 0; c < n; c++)
         snprintf(map->channels[c], LJGAP_FILES_TEXT, "layer %d", c);
     map->n_channels = n;
-    int ch = pick_channel(channel, map->channels, n);
-    if (ch < 0) {
-        snprintf(err->msg, sizeof err->msg, "no channel \"%s\" among the file's %d layers", channel,
-                 n);
-        err->format = NAME, err->offset = -1, err->member[0] = 0;
-        return LJGAP_FILES_CHANNEL;
-    }
+    int ch = ljgap__files_channel_pick(map, channel, err); /* layer 0, the topography, first */
+    if (ch < 0) return LJGAP_FILES_CHANNEL;
     map->channel_index = ch;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[ch]);
     snprintf(map->z_unit, sizeof map->z_unit, "um");
@@ -142,11 +115,9 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         uint32_t ny = ljgap__bytes_u32(&b, 0), nx = ljgap__bytes_u32(&b, 0);
         if (b.bad) return bad(err, (long)b.where, "the file ends before layer %u's sizes", c);
         if (nx == 0 || ny == 0) return bad(err, (long)at, "layer %u has %u x %u points", c, ny, nx);
-        if ((uint64_t)nx * ny > LJGAP_FILES_MAX_POINTS) {
-            snprintf(err->msg, sizeof err->msg, "layer %u: %u x %u points are too many", c, ny, nx);
-            err->format = NAME, err->offset = -1, err->member[0] = 0;
-            return LJGAP_FILES_TOOBIG;
-        }
+        if ((uint64_t)nx * ny > LJGAP_FILES_MAX_POINTS)
+            return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
+                                      "layer %u: %u x %u points are too many", c, ny, nx);
         uint64_t bytes = (uint64_t)nx * ny * 4;
         if (!ljgap__bytes_has(&b, b.pos, bytes))
             return bad(err, (long)len, "the file ends inside layer %u (%u x %u heights at %zu)", c,
@@ -156,15 +127,11 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
             return bad(err, (long)len, "the file ends after layer %u", c);
     }
     ljgap__bytes_seek(&b, data);
-    map->z = malloc((size_t)xres * yres * sizeof *map->z);
-    if (!map->z) return LJGAP_FILES_NOMEM;
-    map->nx = xres, map->ny = yres;
+    int rc = ljgap__files_alloc(map, xres, yres, err);
+    if (rc) return rc;
     for (size_t i = 0; i < (size_t)xres * yres; i++) {
         float v = ljgap__bytes_f32(&b, 0);
-        if (v == NO_DATA || !isfinite(v))
-            map->z[i] = NAN, map->missing++;
-        else
-            map->z[i] = v * 1e-6;
+        ljgap__files_put(map, i, v == NO_DATA ? NAN : v * 1e-6);
     }
     double sx = fabs((double)mppx) * xres * 1e-6, sy = fabs((double)mppy) * yres * 1e-6;
     map->size_x = isfinite(sx) ? sx : 0;
