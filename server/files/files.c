@@ -144,12 +144,29 @@ double ljgap__files_unit_scale(const char *unit)
     static const struct {
         const char *name;
         double scale;
-    } units[] = {{"m", 1},          {"mm", 1e-3},        {"um", 1e-6},        {"~m", 1e-6},
-                 {"\xc2\xb5m", 1e-6}, {"\xb5m", 1e-6},   {"\xce\xbcm", 1e-6}, {"micron", 1e-6},
-                 {"microns", 1e-6}, {"nm", 1e-9},        {"pm", 1e-12},       {"A", 1e-10},
-                 {"\xc3\x85", 1e-10}, {"\xc5", 1e-10},   {"angstrom", 1e-10}, {"Angstrom", 1e-10},
-                 {"km", 1e3},       {"cm", 1e-2},        {"dm", 1e-1},        {"meter", 1},
-                 {"meters", 1},     {"metre", 1},        {"metres", 1}};
+    } units[] = {{"m", 1},
+                 {"mm", 1e-3},
+                 {"um", 1e-6},
+                 {"~m", 1e-6},
+                 {"\xc2\xb5m", 1e-6},
+                 {"\xb5m", 1e-6},
+                 {"\xce\xbcm", 1e-6},
+                 {"micron", 1e-6},
+                 {"microns", 1e-6},
+                 {"nm", 1e-9},
+                 {"pm", 1e-12},
+                 {"A", 1e-10},
+                 {"\xc3\x85", 1e-10},
+                 {"\xc5", 1e-10},
+                 {"angstrom", 1e-10},
+                 {"Angstrom", 1e-10},
+                 {"km", 1e3},
+                 {"cm", 1e-2},
+                 {"dm", 1e-1},
+                 {"meter", 1},
+                 {"meters", 1},
+                 {"metre", 1},
+                 {"metres", 1}};
     char u[32];
     size_t n = 0;
     while (*unit == ' ' || *unit == '\t') /* surrounding blanks ignored */

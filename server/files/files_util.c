@@ -32,7 +32,7 @@ int ljgap__files_fail(ljgap__files_err *err, const char *format, long offset, co
 }
 
 int ljgap__files_report(ljgap__files_err *err, int code, const char *format, long offset,
-                       const char *member, const char *fmt, ...)
+                        const char *member, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -53,19 +53,19 @@ int ljgap__files_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files
 }
 
 int ljgap__files_alloc_at(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err,
-                         long offset)
+                          long offset)
 {
     if (nx == 0 || ny == 0)
         return ljgap__files_fail(err, map->format, offset, NULL, "a map of %zu x %zu points", nx,
-                                ny);
+                                 ny);
     if (nx > LJGAP_FILES_MAX_POINTS / ny)
         return ljgap__files_report(err, LJGAP_FILES_TOOBIG, map->format, offset, NULL,
-                                  "%zu x %zu points: more than the %u a map may have", nx, ny,
-                                  LJGAP_FILES_MAX_POINTS);
+                                   "%zu x %zu points: more than the %u a map may have", nx, ny,
+                                   LJGAP_FILES_MAX_POINTS);
     free(map->z);
     if (!(map->z = malloc(nx * ny * sizeof *map->z)))
         return ljgap__files_report(err, LJGAP_FILES_NOMEM, map->format, -1, NULL,
-                                  "out of memory for %zu x %zu points", nx, ny);
+                                   "out of memory for %zu x %zu points", nx, ny);
     map->nx = nx;
     map->ny = ny;
     return 0;

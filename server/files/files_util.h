@@ -15,7 +15,8 @@ int ljgap__files_fail(ljgap__files_err *err, const char *format, long offset, co
                      const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 /* The same with any code (LJGAP_FILES_CHANNEL, TOOBIG, NOMEM...): returns code; err may be NULL. */
 int ljgap__files_report(ljgap__files_err *err, int code, const char *format, long offset,
-                       const char *member, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
+                        const char *member, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
 /* Clears the map and names its reader (every field the reader does not set stays 0 or ""). */
 void ljgap__files_map_init(ljgap__files_map *map, const char *format);
 /* map->z for nx x ny points (map->nx, ny set): 0, LJGAP_FILES_BAD (an empty map),
@@ -23,7 +24,7 @@ void ljgap__files_map_init(ljgap__files_map *map, const char *format);
  * -1 (ljgap__files_alloc) or offset, where the file states the size (ljgap__files_alloc_at). */
 int ljgap__files_alloc(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err);
 int ljgap__files_alloc_at(ljgap__files_map *map, size_t nx, size_t ny, ljgap__files_err *err,
-                         long offset);
+                          long offset);
 /* Stores a height at map->z[k]: a non-finite value is a missing point (NaN, counted). */
 void ljgap__files_put(ljgap__files_map *map, size_t k, double v);
 /* Appends a channel title (at most LJGAP_FILES_MAX_CHANNELS are kept). */

@@ -267,7 +267,7 @@ static int read_v5(ljgap__bytes *b, wave *w, ljgap__files_err *err)
     if (!ts) return bad(err, BIN5 + 16, "unsupported wave type 0x%x (text or complex)", w->type);
     if ((uint64_t)w->n[0] * w->n[1] > LJGAP_FILES_MAX_POINTS)
         return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
-                                  "%zu x %zu points are too many", w->n[0], w->n[1]);
+                                   "%zu x %zu points are too many", w->n[0], w->n[1]);
     if (wfm < WAVE5 || wfm - WAVE5 < (uint64_t)npnts * ts)
         return bad(err, 4, "wfmSize %u does not hold %u points", wfm, npnts);
 
@@ -326,7 +326,7 @@ static int read_v2(ljgap__bytes *b, wave *w, ljgap__files_err *err)
     if (npnts == 0) return bad(err, (long)wh + 42, "the wave has no points");
     if (npnts > LJGAP_FILES_MAX_POINTS)
         return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
-                                  "%u points are too many", npnts);
+                                   "%u points are too many", npnts);
     if (wfm < WAVE2 + 16 || wfm - WAVE2 - 16 < (uint64_t)npnts * ts)
         return bad(err, 2, "wfmSize %u does not hold %u points", wfm, npnts);
     w->n[0] = npnts, w->n[1] = 1, w->n[2] = 1;

@@ -17,11 +17,16 @@
  * connected-phase origin offsets (the map starts at its own corner), the films and asphere
  * fields of format 3.
  */
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
 #include <time.h>
 
 #include "bytes.h"
-#include "util_b.h"
+#include "files_util.h"
 
 #define MP "metropro"
 
@@ -43,26 +48,26 @@ static const char *const system_types[] = {"",         "Mark IVxp",  "Maxim 3D",
 static int mp_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
                    ljgap__files_err *err)
 {
-    ljgap__fb_map_init(map, MP);
+    ljgap__files_map_init(map, MP);
     ljgap__bytes b;
     ljgap__bytes_init(&b, buf, len);
     int fmt = magic_format(buf, len);
-    if (!fmt) return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 0, NULL, "no MetroPro magic number");
+    if (!fmt) return ljgap__files_fail(err, MP, 0, NULL, "no MetroPro magic number");
     if (len < 834)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, (long)len, NULL,
-                             "the header (834 bytes at least) is cut short at byte %zu", len);
+        return ljgap__files_fail(err, MP, (long)len, NULL,
+                                 "the header (834 bytes at least) is cut short at byte %zu", len);
     ljgap__bytes_seek(&b, 4);
     unsigned hformat = ljgap__bytes_u16(&b, 1);
     uint32_t hsize = ljgap__bytes_u32(&b, 1);
     uint32_t want = fmt == 3 ? 4096 : 834;
     if (hformat != (unsigned)fmt || hsize != want)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 4, NULL,
-                             "header format %u of %u bytes: the magic number says format %d "
-                             "of %u bytes",
-                             hformat, hsize, fmt, want);
+        return ljgap__files_fail(err, MP, 4, NULL,
+                                 "header format %u of %u bytes: the magic number says format %d "
+                                 "of %u bytes",
+                                 hformat, hsize, fmt, want);
     if (len < hsize)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, (long)len, NULL,
-                             "the %u-byte header is cut short at byte %zu", hsize, len);
+        return ljgap__files_fail(err, MP, (long)len, NULL,
+                                 "the %u-byte header is cut short at byte %zu", hsize, len);
     ljgap__bytes_seek(&b, 52);
     unsigned acw = ljgap__bytes_u16(&b, 1), ach = ljgap__bytes_u16(&b, 1);
     unsigned nbuckets = ljgap__bytes_u16(&b, 1);
@@ -87,21 +92,21 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel, lj
     ljgap__bytes_seek(&b, 242);
     int serial = ljgap__bytes_i16(&b, 1);
     if (b.bad) /* not reached: 834 bytes are there */
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, (long)b.where, NULL, "header cut short");
+        return ljgap__files_fail(err, MP, (long)b.where, NULL, "header cut short");
 
     uint64_t acwant = (uint64_t)acw * ach * nbuckets * 2;
     if (acbytes != acwant)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 60, NULL,
-                             "%u bytes of intensity data for %u frames of %u x %u points", acbytes,
-                             nbuckets, acw, ach);
+        return ljgap__files_fail(err, MP, 60, NULL,
+                                 "%u bytes of intensity data for %u frames of %u x %u points",
+                                 acbytes, nbuckets, acw, ach);
     if (cnbytes != (uint64_t)cnw * cnh * 4)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 72, NULL,
-                             "%u bytes of phase data for %u x %u points", cnbytes, cnw, cnh);
+        return ljgap__files_fail(err, MP, 72, NULL, "%u bytes of phase data for %u x %u points",
+                                 cnbytes, cnw, cnh);
     if ((uint64_t)hsize + acbytes + cnbytes > len)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, (long)len, NULL,
-                             "the data (%u + %u bytes after the header) are cut short at "
-                             "byte %zu",
-                             acbytes, cnbytes, len);
+        return ljgap__files_fail(err, MP, (long)len, NULL,
+                                 "the data (%u + %u bytes after the header) are cut short at "
+                                 "byte %zu",
+                                 acbytes, cnbytes, len);
 
     /* channels: the height (when there is phase data), then the intensity frames */
     int has_phase = cnbytes > 0;
@@ -113,34 +118,31 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel, lj
             snprintf(map->channels[map->n_channels++], LJGAP_FILES_TEXT, "Intensity %u", k);
     }
     if (map->n_channels == 0)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 68, NULL,
-                             "neither phase nor intensity data in the file");
-    int c = ljgap__fb_channel(map, channel, 0);
-    if (c < 0)
-        return ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, MP, -1, NULL,
-                             "no channel \"%s\": the file has %d", channel, map->n_channels);
+        return ljgap__files_fail(err, MP, 68, NULL, "neither phase nor intensity data in the file");
+    int c = ljgap__files_channel_pick(map, channel, err);
+    if (c < 0) return LJGAP_FILES_CHANNEL;
     map->channel_index = c;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[c]);
 
     int height = has_phase && c == 0;
     unsigned w = height ? cnw : acw, h = height ? cnh : ach;
-    int rc = ljgap__fb_alloc(map, w, h, err, MP, height ? 68 : 52);
+    int rc = ljgap__files_alloc_at(map, w, h, err, height ? 68 : 52);
     if (rc) return rc;
     size_t n = (size_t)w * h;
     if (height) {
         double R = phase_res == 0 ? 4096 : phase_res == 1 ? 32768 : phase_res == 2 ? 131072 : 0;
         if (R == 0)
-            return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 218, NULL,
-                                 "phase resolution %d: 0, 1 or 2 are defined", phase_res);
+            return ljgap__files_fail(err, MP, 218, NULL,
+                                     "phase resolution %d: 0, 1 or 2 are defined", phase_res);
         double q = scale * obliquity * wavelength / R;
         if (!isfinite(q) || q == 0)
-            return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, 164, NULL,
-                                 "the scale, obliquity and wavelength give no height scale");
+            return ljgap__files_fail(err, MP, 164, NULL,
+                                     "the scale, obliquity and wavelength give no height scale");
         if (sign == 1) q = -q;
         ljgap__bytes_seek(&b, (size_t)hsize + acbytes);
         for (size_t k = 0; k < n; k++) {
             int32_t v = ljgap__bytes_i32(&b, 1);
-            ljgap__fb_put(map, k, v >= 2147483640 ? NAN : q * v);
+            ljgap__files_put(map, k, v >= 2147483640 ? NAN : q * v);
         }
         snprintf(map->z_unit, sizeof map->z_unit, "m");
     } else {
@@ -148,11 +150,11 @@ static int mp_read(const unsigned char *buf, size_t len, const char *channel, lj
         ljgap__bytes_seek(&b, (size_t)hsize + (size_t)frame * n * 2);
         for (size_t k = 0; k < n; k++) {
             unsigned v = ljgap__bytes_u16(&b, 1);
-            ljgap__fb_put(map, k, v >= 65412 ? NAN : (double)v);
+            ljgap__files_put(map, k, v >= 65412 ? NAN : (double)v);
         }
     }
     if (b.bad) /* not reached: the sizes were checked */
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, MP, (long)b.where, NULL, "data cut short");
+        return ljgap__files_fail(err, MP, (long)b.where, NULL, "data cut short");
     if (isfinite(lateral) && lateral > 0) map->size_x = lateral * w, map->size_y = lateral * h;
     const char *sys = systype > 0 && systype < (int)(sizeof system_types / sizeof *system_types)
                           ? system_types[systype]

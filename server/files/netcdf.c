@@ -18,10 +18,15 @@
  * (HDF5) files (recognised and refused with a message), record (unlimited) variables,
  * nonuniform line scans (dimension `n`), and other variable names than `heights`.
  */
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
 
 #include "bytes.h"
-#include "util_b.h"
+#include "files_util.h"
 
 #define NC "netcdf"
 #define NC_DIMENSION 10
@@ -139,7 +144,7 @@ static int att_str(nc_file *f, const nc_att *a, char *out, size_t size)
     if (a->type != 2) return 0;
     const unsigned char *p = ljgap__bytes_at(&f->b, a->at, (size_t)a->n);
     if (!p) return 0;
-    ljgap__fb_text(p, (size_t)a->n, out, size);
+    ljgap__files_utf8(p, (size_t)a->n, out, size);
     return 1;
 }
 
@@ -278,7 +283,7 @@ static void read_info(nc_file *f, ljgap__files_map *map)
         char val[40], unit[16];
         if (tip && json_text(js, tip, "value", val, sizeof val) &&
             json_text(js, tip, "unit", unit, sizeof unit)) {
-            double r = strtod(val, NULL) * ljgap__fb_length_unit(unit);
+            double r = strtod(val, NULL) * ljgap__files_unit_scale(unit);
             if (isfinite(r) && r > 0) map->tip_radius = r;
         }
     }
@@ -305,62 +310,59 @@ static double default_fill(int t)
 static int nc_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
                    ljgap__files_err *err)
 {
-    ljgap__fb_map_init(map, NC);
+    ljgap__files_map_init(map, NC);
     if (len >= 8 && !memcmp(buf, "\x89HDF\r\n\x1a\n", 8))
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL,
-                             "a netCDF-4 (HDF5) file: only the classic formats are read; save "
-                             "as NETCDF3_64BIT_OFFSET (SurfaceTopography's default)");
+        return ljgap__files_fail(err, NC, 0, NULL,
+                                 "a netCDF-4 (HDF5) file: only the classic formats are read; save "
+                                 "as NETCDF3_64BIT_OFFSET (SurfaceTopography's default)");
     nc_file *f = calloc(1, sizeof *f);
-    if (!f) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, NC, -1, NULL, "out of memory");
+    if (!f) return ljgap__files_report(err, LJGAP_FILES_NOMEM, NC, -1, NULL, "out of memory");
     ljgap__bytes_init(&f->b, buf, len);
     int rc = 0;
     if (len < 4 || memcmp(buf, "CDF", 3) || (buf[3] != 1 && buf[3] != 2 && buf[3] != 5)) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, 0, NULL, "no classic netCDF magic");
+        rc = ljgap__files_fail(err, NC, 0, NULL, "no classic netCDF magic");
         goto done;
     }
     f->version = buf[3];
     long bad = rd_header(f);
     if (bad > (long)len) bad = (long)len; /* a padding skipped past the end */
     if (bad >= 0) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, bad, NULL,
-                           "the netCDF header is %s at byte %ld",
-                           f->b.bad ? "cut short" : "malformed", bad);
+        rc = ljgap__files_fail(err, NC, bad, NULL, "the netCDF header is %s at byte %ld",
+                               f->b.bad ? "cut short" : "malformed", bad);
         goto done;
     }
     f->b.bad = 0;
     if (f->data_end > len) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
-                           "the file is cut short at byte %zu: its variables reach byte %llu", len,
-                           (unsigned long long)f->data_end);
+        rc = ljgap__files_fail(err, NC, (long)len, NULL,
+                               "the file is cut short at byte %zu: its variables reach byte %llu",
+                               len, (unsigned long long)f->data_end);
         goto done;
     }
     snprintf(map->channels[0], LJGAP_FILES_TEXT, "heights");
     map->n_channels = 1;
-    if (ljgap__fb_channel(map, channel, 0) != 0) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, NC, -1, NULL,
-                           "no channel \"%s\": the file has one, heights", channel);
+    if (ljgap__files_channel_pick(map, channel, err) != 0) {
+        rc = LJGAP_FILES_CHANNEL;
         goto done;
     }
     snprintf(map->channel, sizeof map->channel, "heights");
     nc_var *h = &f->heights;
     if (!h->present) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL, "no variable named heights");
+        rc = ljgap__files_fail(err, NC, -1, NULL, "no variable named heights");
         goto done;
     }
     if (h->ndims < 1 || h->ndims > 2) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
-                           "the variable heights has %d dimensions: 1 or 2 are read", h->ndims);
+        rc = ljgap__files_fail(err, NC, -1, NULL,
+                               "the variable heights has %d dimensions: 1 or 2 are read", h->ndims);
         goto done;
     }
     uint64_t n0 = f->dimlen[h->dimid[0]], n1 = h->ndims == 2 ? f->dimlen[h->dimid[1]] : 1;
     if (n0 == 0 || n1 == 0) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
-                           "heights is a record (unlimited) variable or empty: not read");
+        rc = ljgap__files_fail(err, NC, -1, NULL,
+                               "heights is a record (unlimited) variable or empty: not read");
         goto done;
     }
     if (!strcmp(f->dimname[h->dimid[0]], "n")) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, -1, NULL,
-                           "a nonuniform line scan (dimension n): not read");
+        rc = ljgap__files_fail(err, NC, -1, NULL, "a nonuniform line scan (dimension n): not read");
         goto done;
     }
     /* (y, x): rows along y as stored; otherwise the first index runs along x */
@@ -368,15 +370,15 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
              !strcmp(f->dimname[h->dimid[1]], "x");
     size_t nx = (size_t)(yx ? n1 : n0), ny = (size_t)(yx ? n0 : n1);
     if (n0 > LJGAP_FILES_MAX_POINTS || n1 > LJGAP_FILES_MAX_POINTS) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, NC, -1, NULL, "%llu x %llu points",
-                           (unsigned long long)n0, (unsigned long long)n1);
+        rc = ljgap__files_report(err, LJGAP_FILES_TOOBIG, NC, -1, NULL, "%llu x %llu points",
+                                 (unsigned long long)n0, (unsigned long long)n1);
         goto done;
     }
     size_t n = nx * ny, sz = type_size(h->type);
     if (h->begin > len || n > (len - h->begin) / sz) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
-                           "the heights (%zu values from byte %llu) are cut short at byte %zu", n,
-                           (unsigned long long)h->begin, len);
+        rc = ljgap__files_fail(err, NC, (long)len, NULL,
+                               "the heights (%zu values from byte %llu) are cut short at byte %zu",
+                               n, (unsigned long long)h->begin, len);
         goto done;
     }
     int has_mask = f->mask.present && f->mask.ndims == h->ndims &&
@@ -384,19 +386,19 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
                    type_size(f->mask.type);
     size_t msz = has_mask ? type_size(f->mask.type) : 0;
     if (has_mask && (f->mask.begin > len || n > (len - f->mask.begin) / msz)) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)len, NULL,
-                           "the mask (%zu values from byte %llu) is cut short at byte %zu", n,
-                           (unsigned long long)f->mask.begin, len);
+        rc = ljgap__files_fail(err, NC, (long)len, NULL,
+                               "the mask (%zu values from byte %llu) is cut short at byte %zu", n,
+                               (unsigned long long)f->mask.begin, len);
         goto done;
     }
-    rc = ljgap__fb_alloc(map, nx, ny, err, NC, -1);
+    rc = ljgap__files_alloc_at(map, nx, ny, err, -1);
     if (rc) goto done;
 
     /* units: heights:unit, else x:unit (SurfaceTopography keeps one unit for all) */
     char unit[32] = "";
     if (!att_str(f, &h->unit, unit, sizeof unit) || !unit[0])
         att_str(f, &f->x.unit, unit, sizeof unit);
-    double fz = ljgap__fb_length_unit(unit);
+    double fz = ljgap__files_unit_scale(unit);
     snprintf(map->z_unit, sizeof map->z_unit, "%s", unit);
     double fill = default_fill(h->type), missing = 0, scale = 1, offset = 0;
     int has_fill = 1, has_missing = att_num(f, &h->missing, &missing);
@@ -411,16 +413,16 @@ static int nc_read(const unsigned char *buf, size_t len, const char *channel, lj
             if (has_mask && value_at(&f->b, f->mask.type, (size_t)f->mask.begin + k * msz) != 0)
                 hole = 1;
             v = (v * scale + offset) * (fz > 0 ? fz : 1);
-            ljgap__fb_put(map, j * nx + i, hole ? NAN : v);
+            ljgap__files_put(map, j * nx + i, hole ? NAN : v);
         }
     if (f->b.bad) { /* not reached: the extents were checked */
-        rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, NC, (long)f->b.where, NULL, "data cut short");
+        rc = ljgap__files_fail(err, NC, (long)f->b.where, NULL, "data cut short");
         goto done;
     }
     /* size: x:length and y:length in x's unit */
     char xunit[32] = "";
     if (!att_str(f, &f->x.unit, xunit, sizeof xunit)) snprintf(xunit, sizeof xunit, "%s", unit);
-    double fl = ljgap__fb_length_unit(xunit), lx = 0, ly = 0, per = 0;
+    double fl = ljgap__files_unit_scale(xunit), lx = 0, ly = 0, per = 0;
     if (fl > 0 && att_num(f, &f->x.length, &lx) && isfinite(lx) && lx > 0) {
         map->size_x = lx * fl;
         if (ny == 1)

@@ -199,7 +199,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     if (!bps) return bad(err, (long)h + 348, "unknown data type %u", dtype);
     if ((uint64_t)xres * yres > LJGAP_FILES_MAX_POINTS)
         return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
-                                  "%u x %u points are too many", xres, yres);
+                                   "%u x %u points are too many", xres, yres);
     if (td->len < (uint64_t)xres * yres * bps)
         return bad(err, (long)td->entry, "the data tag holds %zu bytes, %u x %u points need %llu",
                    td->len, xres, yres, (unsigned long long)xres * yres * bps);

@@ -117,7 +117,7 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
         if (nx == 0 || ny == 0) return bad(err, (long)at, "layer %u has %u x %u points", c, ny, nx);
         if ((uint64_t)nx * ny > LJGAP_FILES_MAX_POINTS)
             return ljgap__files_report(err, LJGAP_FILES_TOOBIG, NAME, -1, NULL,
-                                      "layer %u: %u x %u points are too many", c, ny, nx);
+                                       "layer %u: %u x %u points are too many", c, ny, nx);
         uint64_t bytes = (uint64_t)nx * ny * 4;
         if (!ljgap__bytes_has(&b, b.pos, bytes))
             return bad(err, (long)len, "the file ends inside layer %u (%u x %u heights at %zu)", c,

@@ -19,11 +19,16 @@
  * byte order (format 257), the x and y offsets, and objects other than height maps (series,
  * spectra): they are read as maps.
  */
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
 #include <zlib.h>
 
 #include "bytes.h"
-#include "util_b.h"
+#include "files_util.h"
 
 #define SUR "sur"
 #define HDR 512
@@ -69,7 +74,7 @@ static void field_text(ljgap__bytes *b, size_t at, size_t n, char *out, size_t s
 {
     const unsigned char *p = ljgap__bytes_at(b, at, n);
     if (p)
-        ljgap__fb_text(p, n, out, size);
+        ljgap__files_utf8(p, n, out, size);
     else
         out[0] = 0;
 }
@@ -81,18 +86,18 @@ static int sur_header(ljgap__bytes *b, size_t at, sur_obj *o, ljgap__files_err *
     o->at = at;
     const unsigned char *sig = ljgap__bytes_at(b, at, 12);
     if (!sig || (memcmp(sig, "DIGITAL SURF", 12) && memcmp(sig, "DSCOMPRESSED", 12)))
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at, NULL,
-                             "no Digital Surf object header at byte %zu", at);
+        return ljgap__files_fail(err, SUR, (long)at, NULL,
+                                 "no Digital Surf object header at byte %zu", at);
     o->compressed = !memcmp(sig, "DSCOMPRESSED", 12);
     if (!ljgap__bytes_has(b, at, HDR))
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
-                             "the 512-byte header at byte %zu is cut short at byte %zu", at,
-                             b->len);
+        return ljgap__files_fail(err, SUR, (long)b->len, NULL,
+                                 "the 512-byte header at byte %zu is cut short at byte %zu", at,
+                                 b->len);
     ljgap__bytes_seek(b, at + 12);
     unsigned format = ljgap__bytes_u16(b, 0);
     if (format != 0)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 12, NULL,
-                             "format %u: only the PC byte order (0) is read", format);
+        return ljgap__files_fail(err, SUR, (long)at + 12, NULL,
+                                 "format %u: only the PC byte order (0) is read", format);
     ljgap__bytes_seek(b, at + 18);
     o->type = ljgap__bytes_u16(b, 0);
     field_text(b, at + 20, 30, o->name, sizeof o->name);
@@ -122,26 +127,26 @@ static int sur_header(ljgap__bytes *b, size_t at, sur_obj *o, ljgap__files_err *
     ljgap__bytes_seek(b, at + 474);
     o->zoff = ljgap__bytes_f32(b, 0);
     if (b->bad) /* not reached: the header's 512 bytes are there */
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->where, NULL, "header cut short");
+        return ljgap__files_fail(err, SUR, (long)b->where, NULL, "header cut short");
     if (o->bits != 16 && o->bits != 32)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 98, NULL,
-                             "%d bits a point: only 16 and 32 are defined", o->bits);
+        return ljgap__files_fail(err, SUR, (long)at + 98, NULL,
+                                 "%d bits a point: only 16 and 32 are defined", o->bits);
     if (nx <= 0 || ny <= 0)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 108, NULL,
-                             "a grid of %d x %d points", (int)nx, (int)ny);
+        return ljgap__files_fail(err, SUR, (long)at + 108, NULL, "a grid of %d x %d points",
+                                 (int)nx, (int)ny);
     o->nx = (uint32_t)nx, o->ny = (uint32_t)ny;
     if ((uint64_t)o->nx * o->ny != total)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 116, NULL,
-                             "%u points stated, %u x %u in the grid", total, o->nx, o->ny);
+        return ljgap__files_fail(err, SUR, (long)at + 116, NULL,
+                                 "%u points stated, %u x %u in the grid", total, o->nx, o->ny);
     if (!isfinite(o->dz) || !isfinite(o->zoff))
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)at + 128, NULL,
-                             "the z step or offset is not a finite number");
+        return ljgap__files_fail(err, SUR, (long)at + 128, NULL,
+                                 "the z step or offset is not a finite number");
     o->data = at + HDR + comment + priv;
     uint64_t size = o->compressed ? o->csize : (uint64_t)total * (unsigned)(o->bits / 8);
     if (!ljgap__bytes_has(b, o->data, 0) || size > b->len - o->data)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)b->len, NULL,
-                             "the points (%llu bytes from byte %zu) are cut short at byte %zu",
-                             (unsigned long long)size, o->data, b->len);
+        return ljgap__files_fail(err, SUR, (long)b->len, NULL,
+                                 "the points (%llu bytes from byte %zu) are cut short at byte %zu",
+                                 (unsigned long long)size, o->data, b->len);
     o->end = o->data + (size_t)size;
     return 0;
 }
@@ -153,44 +158,46 @@ static int sur_inflate(ljgap__bytes *b, const sur_obj *o, unsigned char *out, si
     ljgap__bytes_seek(b, o->data);
     uint32_t ndir = ljgap__bytes_u32(b, 0);
     if (b->bad || ndir == 0 || ndir > (o->end - o->data) / 8)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
-                             "a compressed data block with %u directory entries", ndir);
+        return ljgap__files_fail(err, SUR, (long)o->data, NULL,
+                                 "a compressed data block with %u directory entries", ndir);
     size_t stream = o->data + 4 + (size_t)ndir * 8, done = 0;
     for (uint32_t d = 0; d < ndir; d++) {
         ljgap__bytes_seek(b, o->data + 4 + (size_t)d * 8);
         uint32_t raw = ljgap__bytes_u32(b, 0), zipped = ljgap__bytes_u32(b, 0);
         if (b->bad || zipped > o->end - stream || raw > rawsize - done)
-            return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)(o->data + 4 + d * 8), NULL,
-                                 "compressed stream %u (%u bytes, %u raw) does not fit", d, zipped,
-                                 raw);
+            return ljgap__files_fail(err, SUR, (long)(o->data + 4 + d * 8), NULL,
+                                     "compressed stream %u (%u bytes, %u raw) does not fit", d,
+                                     zipped, raw);
         z_stream zs;
         memset(&zs, 0, sizeof zs);
         if (inflateInit(&zs) != Z_OK)
-            return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
+            return ljgap__files_report(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
         zs.next_in = (unsigned char *)(uintptr_t)(b->buf + stream), zs.avail_in = zipped;
         zs.next_out = out + done, zs.avail_out = raw;
         int rc = inflate(&zs, Z_FINISH);
         size_t got = raw - zs.avail_out;
         inflateEnd(&zs);
         if (rc != Z_STREAM_END || got != raw)
-            return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)stream, NULL,
-                                 "compressed stream %u does not inflate to its %u bytes", d, raw);
+            return ljgap__files_fail(err, SUR, (long)stream, NULL,
+                                     "compressed stream %u does not inflate to its %u bytes", d,
+                                     raw);
         done += raw, stream += zipped;
     }
     if (done != rawsize)
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)o->data, NULL,
-                             "the compressed streams hold %zu bytes, the grid %zu", done, rawsize);
+        return ljgap__files_fail(err, SUR, (long)o->data, NULL,
+                                 "the compressed streams hold %zu bytes, the grid %zu", done,
+                                 rawsize);
     return 0;
 }
 
 static int sur_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
                     ljgap__files_err *err)
 {
-    ljgap__fb_map_init(map, SUR);
+    ljgap__files_map_init(map, SUR);
     ljgap__bytes b;
     ljgap__bytes_init(&b, buf, len);
     if (!ljgap__bytes_has(&b, 0, 16))
-        return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short in the header");
+        return ljgap__files_fail(err, SUR, (long)len, NULL, "cut short in the header");
     ljgap__bytes_seek(&b, 14);
     unsigned nobj = ljgap__bytes_u16(&b, 0);
     if (nobj == 0) nobj = 1;
@@ -208,14 +215,12 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
         map->n_channels = (int)k + 1;
         at = objs[k].end;
     }
-    int c = ljgap__fb_channel(map, channel, 0);
-    if (c < 0)
-        return ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, SUR, -1, NULL,
-                             "no channel \"%s\": the file has %d", channel, map->n_channels);
+    int c = ljgap__files_channel_pick(map, channel, err);
+    if (c < 0) return LJGAP_FILES_CHANNEL;
     const sur_obj *o = &objs[c];
     map->channel_index = c;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[c]);
-    int rc = ljgap__fb_alloc(map, o->nx, o->ny, err, SUR, (long)o->at + 108);
+    int rc = ljgap__files_alloc_at(map, o->nx, o->ny, err, (long)o->at + 108);
     if (rc) return rc;
 
     size_t n = (size_t)o->nx * o->ny, w = (size_t)o->bits / 8;
@@ -223,7 +228,8 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
     unsigned char *raw = NULL;
     if (o->compressed) {
         raw = malloc(n * w);
-        if (!raw) return ljgap__fb_fail(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
+        if (!raw)
+            return ljgap__files_report(err, LJGAP_FILES_NOMEM, SUR, -1, NULL, "out of memory");
         rc = sur_inflate(&b, o, raw, n * w, err);
         if (rc) {
             free(raw);
@@ -232,10 +238,10 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
         p = raw;
     } else {
         p = ljgap__bytes_at(&b, o->data, n * w); /* checked by sur_header */
-        if (!p) return ljgap__fb_fail(err, LJGAP_FILES_BAD, SUR, (long)len, NULL, "cut short");
+        if (!p) return ljgap__files_fail(err, SUR, (long)len, NULL, "cut short");
     }
-    double fz = ljgap__fb_length_unit(o->uz), fx = ljgap__fb_length_unit(o->ux),
-           fy = ljgap__fb_length_unit(o->uy);
+    double fz = ljgap__files_unit_scale(o->uz), fx = ljgap__files_unit_scale(o->ux),
+           fy = ljgap__files_unit_scale(o->uy);
     if (fz == 0) fz = 1; /* not a length: the values in the stated unit */
     double sign = o->inversion >= 1 && o->inversion <= 3 ? -1 : 1;
     int64_t hole = (int64_t)o->zmin - 2;
@@ -244,9 +250,9 @@ static int sur_read(const unsigned char *buf, size_t len, const char *channel, l
                            : (int32_t)((uint32_t)p[4 * k] | (uint32_t)p[4 * k + 1] << 8 |
                                        (uint32_t)p[4 * k + 2] << 16 | (uint32_t)p[4 * k + 3] << 24);
         if (o->nonmeasured && v == hole)
-            ljgap__fb_put(map, k, NAN);
+            ljgap__files_put(map, k, NAN);
         else
-            ljgap__fb_put(map, k, sign * ((double)v * o->dz + o->zoff) * fz);
+            ljgap__files_put(map, k, sign * ((double)v * o->dz + o->zoff) * fz);
     }
     free(raw);
     /* inversion 2 and 3 also mirror the map (as Gwyddion reads them): x, then y */

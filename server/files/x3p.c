@@ -17,11 +17,15 @@
  * Points run x fastest, then y, then the layer. Units are metres throughout. The md5 checksums
  * are not checked (zip's CRC-32 is); an error in a member names it in err->member.
  */
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <strings.h>
 
 #include "bytes.h"
-#include "util_b.h"
+#include "files_util.h"
 #include "zip.h"
 
 #define X3P "x3p"
@@ -124,13 +128,13 @@ static int xml_num(span doc, const char *path, double *v)
 
 static int x3p_fail(ljgap__files_err *err, const char *fmt, const char *what)
 {
-    return ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, "main.xml", fmt, what);
+    return ljgap__files_fail(err, X3P, -1, "main.xml", fmt, what);
 }
 
 static int x3p_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
                     ljgap__files_err *err)
 {
-    ljgap__fb_map_init(map, X3P);
+    ljgap__files_map_init(map, X3P);
     unsigned char *xml = NULL, *data = NULL, *valid = NULL;
     size_t xlen = 0, dlen = 0, vlen = 0;
     int rc = ljgap__zip_extract(buf, len, "main.xml", XML_MAX, &xml, &xlen, X3P, err);
@@ -205,15 +209,14 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
     for (size_t l = 0; l < nl; l++)
         snprintf(map->channels[l], LJGAP_FILES_TEXT, nl == 1 ? "Z" : "Z layer %zu", l);
     map->n_channels = (int)nl;
-    int c = ljgap__fb_channel(map, channel, 0);
+    int c = ljgap__files_channel_pick(map, channel, err);
     if (c < 0) {
-        rc = ljgap__fb_fail(err, LJGAP_FILES_CHANNEL, X3P, -1, NULL,
-                           "no channel \"%s\": the file has %d", channel, map->n_channels);
+        rc = LJGAP_FILES_CHANNEL;
         goto done;
     }
     map->channel_index = c;
     snprintf(map->channel, sizeof map->channel, "%s", map->channels[c]);
-    rc = ljgap__fb_alloc(map, nx, ny, err, X3P, -1);
+    rc = ljgap__files_alloc_at(map, nx, ny, err, -1);
     if (rc) goto done;
     size_t n = nx * ny, first = (size_t)c * n;
 
@@ -221,25 +224,25 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
     if (xml_text(doc, "Record3/DataLink/PointDataLink", link, sizeof link) && link[0]) {
         /* the whole member is inflated: all its layers within the limit of one map */
         if (n * w > (size_t)LJGAP_FILES_MAX_POINTS * 8 / nl) {
-            rc = ljgap__fb_fail(err, LJGAP_FILES_TOOBIG, X3P, -1, link,
-                               "%zu layers of %zu x %zu points exceed the limit", nl, nx, ny);
+            rc = ljgap__files_report(err, LJGAP_FILES_TOOBIG, X3P, -1, link,
+                                     "%zu layers of %zu x %zu points exceed the limit", nl, nx, ny);
             goto done;
         }
         rc = ljgap__zip_extract(buf, len, link, n * nl * w + 64, &data, &dlen, X3P, err);
         if (rc) goto done;
         if (dlen / w < n * nl) {
-            rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, link,
-                               "%zu bytes of points, %zu x %zu x %zu values of %zu bytes "
-                               "stated",
-                               dlen, nx, ny, nl, w);
+            rc = ljgap__files_fail(err, X3P, -1, link,
+                                   "%zu bytes of points, %zu x %zu x %zu values of %zu bytes "
+                                   "stated",
+                                   dlen, nx, ny, nl, w);
             goto done;
         }
         if (xml_text(doc, "Record3/DataLink/ValidPointsLink", t2, sizeof t2) && t2[0]) {
             rc = ljgap__zip_extract(buf, len, t2, n * nl / 8 + 1, &valid, &vlen, X3P, err);
             if (rc) goto done;
             if (vlen < (n * nl + 7) / 8) {
-                rc = ljgap__fb_fail(err, LJGAP_FILES_BAD, X3P, -1, t2,
-                                   "%zu bytes of valid-point bits for %zu points", vlen, n * nl);
+                rc = ljgap__files_fail(
+                    err, X3P, -1, t2, "%zu bytes of valid-point bits for %zu points", vlen, n * nl);
                 goto done;
             }
         }
@@ -253,7 +256,7 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
                                       : ljgap__bytes_f64(&b, 0);
             size_t q = first + k;
             if (valid && !(valid[q / 8] >> (q % 8) & 1)) v = NAN;
-            ljgap__fb_put(map, k, v);
+            ljgap__files_put(map, k, v);
         }
     } else {
         span list, item;
@@ -281,7 +284,7 @@ static int x3p_read(const unsigned char *buf, size_t len, const char *channel, l
                     goto done;
                 }
                 if (dtype == 'I' || dtype == 'L') d = zoff + zinc * d;
-                ljgap__fb_put(map, k - first, d);
+                ljgap__files_put(map, k - first, d);
             }
             k++;
             size_t used = (size_t)(item.s + item.n - list.s);
