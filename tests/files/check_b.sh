@@ -2,8 +2,8 @@
 # check_b.sh -- the X3P, Digital Surf, MetroPro and netCDF readers (server/files/) against
 # independent readers, point by point (issue 28). tests/files/gen_b.py writes X3P, .sur and
 # MetroPro files from the formats' descriptions and Gwyddion (2.62, headless:
-# gwyddion --convert-to-gwy) converts each to .gwy, which gwy_read_b.py parses; gen_nc.py writes
-# netCDF files with python3-netcdf4 and reads them back with it. compare_b.py holds ljgap's
+# gwyddion --convert-to-gwy) converts each to .gwy, which gwy_dump.py --json parses; gen_nc.py
+# writes netCDF files with python3-netcdf4 and reads them back with it. compare_b.py holds ljgap's
 # reading (dump_b, built here from the readers' sources) against the generator's values and
 # Gwyddion's: grid, size, unit, every height (relative 1e-12), the missing points, the
 # metadata. Then every file cut short at several lengths must be refused as bad (exit 2), and
@@ -64,7 +64,7 @@ check() {
     if [ ! -s "$b.gwy" ]; then
         timeout 120 gwyddion --convert-to-gwy="$b.gwy" "$f" > "$b.gwylog" 2>&1
     fi
-    if [ ! -s "$b.gwy" ] || ! "$PY" tests/files/gwy_read_b.py "$b.gwy" > "$b.gwy.json"; then
+    if [ ! -s "$b.gwy" ] || ! "$PY" tests/files/gwy_dump.py --json "$b.gwy" > "$b.gwy.json"; then
         notok "$1: Gwyddion converts it ($(head -c 200 "$b.gwylog"))"
         return
     fi

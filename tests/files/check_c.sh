@@ -2,8 +2,8 @@
 # check_c.sh -- the readers of Igor binary waves, Park Systems TIFF and Sensofar PLu
 # (server/files/ibw.c, park_tiff.c, plu.c) against an independent reader, Gwyddion (2.62):
 # tests/files/gen_c.py writes the files from the formats' documentation, Gwyddion converts each
-# to its native .gwy (`gwyddion --convert-to-gwy`, headless), tests/files/gwy_read_c.py reads
-# that, and our reader's dump ($BUILD/tests/test_files_c --dump) must agree with it point by
+# to its native .gwy (`gwyddion --convert-to-gwy`, headless), tests/files/gwy_dump.py --points
+# reads that, and our reader's dump ($BUILD/tests/test_files_c --dump) must agree with it point by
 # point (relative 1e-6), in grid, size and height unit, with our missing points exactly where
 # Gwyddion masks points. One "ok"/"not ok" line per channel compared; without gwyddion
 # "ok 1 # skip no gwyddion".
@@ -51,7 +51,8 @@ while read -r fmt file ch gid titles; do
         say "not ok" "$file channel $ch: our reader failed: $(cat "$tmp/err")"
         continue
     fi
-    if ! "$py" tests/files/gwy_read_c.py "$tmp/$file.gwy" "$gid" >"$tmp/theirs" 2>"$tmp/err"; then
+    if ! "$py" tests/files/gwy_dump.py --points "$tmp/$file.gwy" "$gid" >"$tmp/theirs" \
+        2>"$tmp/err"; then
         say "not ok" "$file: the .gwy does not parse: $(tail -1 "$tmp/err")"
         continue
     fi

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """compare_b.py -- point-by-point comparison for tests/files/check_b.sh: what ljgap's reader
 gave (dump_b's JSON) against the generator's truth (gen_b.py, gen_nc.py) and, where given,
-against Gwyddion's reading (gwy_read_b.py's JSON of the .gwy file Gwyddion wrote).
+against Gwyddion's reading (gwy_dump.py --json of the .gwy file Gwyddion wrote).
 
 usage: compare_b.py OURS.json TRUTH.json [GWY.json GWY_CHANNEL [HOLES[,offset]]]
   HOLES mask: Gwyddion marks our missing points in its mask (X3P, MetroPro)
