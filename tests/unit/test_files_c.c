@@ -48,6 +48,84 @@ static const char *const asylum_labels[] = {"AmplitudeRetrace", "HeightRetrace",
     "ScanSize: 2e-07\rMicroscopeModel: Cypher S\rDate: 2024-05-06\rTime: 1:02:03 PM\r"             \
     "TipRadius: 7e-09\rPhaseUnit: deg\r"
 
+/* An Asylum scan: nl layers (titled as asylum_labels) of nx x ny float32 heights, steps of
+ * 10 nm, the units in the note. */
+static igor_spec asylum_spec(size_t nx, size_t ny, size_t nl)
+{
+    return (igor_spec){.type = 2,
+                       .nx = nx,
+                       .ny = ny,
+                       .nl = nl,
+                       .dx = 1e-8,
+                       .dy = 1e-8,
+                       .data_unit = "",
+                       .dim_unit = "m",
+                       .note = ASYLUM_NOTE,
+                       .labels = asylum_labels};
+}
+
+/* A one-layer wave of the type, heights and steps in metres, steps of d. */
+static igor_spec plain_spec(unsigned type, size_t nx, size_t ny, double d)
+{
+    return (igor_spec){.type = type,
+                       .nx = nx,
+                       .ny = ny,
+                       .nl = 1,
+                       .dx = d,
+                       .dy = d,
+                       .data_unit = "m",
+                       .dim_unit = "m"};
+}
+
+/* A Park Systems version 2 file (float32 µm heights, gain 1, one Topography channel). */
+static park_spec park_small(size_t xres, size_t yres)
+{
+    return (park_spec){.version = 2,
+                       .dtype = 2,
+                       .xres = xres,
+                       .yres = yres,
+                       .gain = 1,
+                       .zscale = 1,
+                       .unit = "um",
+                       .source = "Topography",
+                       .park = 1};
+}
+
+/* Makes the 16-bit words of an Igor version 5 file's headers (384 bytes) sum to 0 again. */
+static void igor_checksum(unsigned char *p, size_t n)
+{
+    wbuf c = {.p = p, .n = n, .cap = n};
+    unsigned sum = 0;
+    put_uint_at(&c, 2, 0, 2);
+    for (size_t i = 0; i < 384; i += 2)
+        sum += p[i] | (unsigned)p[i + 1] << 8;
+    put_uint_at(&c, 2, (0x10000 - (sum & 0xffff)) & 0xffff, 2);
+}
+
+/* The reader refuses the bytes with code and leaves no map; its error report. */
+static ljgap__files_err refused(const ljgap__files_format *f, const unsigned char *p, size_t n,
+                                const char *channel, int code)
+{
+    ljgap__files_map m;
+    ljgap__files_err e;
+    assert_int_equal(f->read(p, n, channel, &m, &e), code);
+    assert_null(m.z);
+    return e;
+}
+
+/* A Park map of nx x ny points: gain (raw zscale + zoff) in units of q, stored bottom row
+ * first, within tol (0: exactly). */
+static void check_park_points(const ljgap__files_map *m, size_t nx, size_t ny, double gain,
+                              double zscale, double zoff, double q, double tol)
+{
+    assert_int_equal(m->nx, nx);
+    assert_int_equal(m->ny, ny);
+    for (size_t j = 0; j < m->ny; j++)
+        for (size_t i = 0; i < m->nx; i++)
+            assert_true(fabs(m->z[(m->ny - 1 - j) * m->nx + i] -
+                             gain * (park_raw(i, j) * zscale + zoff) * q) <= tol);
+}
+
 static void check_igor_points(const ljgap__files_map *m, size_t c, double q)
 {
     for (size_t j = 0; j < m->ny; j++)
@@ -58,16 +136,8 @@ static void check_igor_points(const ljgap__files_map *m, size_t c, double q)
 static void test_ibw_asylum(void **state)
 {
     (void)state;
-    igor_spec s = {.type = 2,
-                   .nx = 24,
-                   .ny = 16,
-                   .nl = 3,
-                   .dx = 1e-8,
-                   .dy = 2e-8,
-                   .data_unit = "",
-                   .dim_unit = "m",
-                   .note = ASYLUM_NOTE,
-                   .labels = asylum_labels};
+    igor_spec s = asylum_spec(24, 16, 3);
+    s.dy = 2e-8;
     wbuf b = igor5(&s);
     ljgap__files_map m;
     ljgap__files_err e;
@@ -99,10 +169,8 @@ static void test_ibw_asylum(void **state)
     assert_int_equal(m.channel_index, 0);
     check_igor_points(&m, 0, 1.0);
     map_free(&m);
-    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "3", &m, &e), LJGAP_FILES_CHANNEL);
-    assert_null(m.z);
-    assert_int_equal(ljgap__files_ibw.read(b.p, b.n, "Friction", &m, &e), LJGAP_FILES_CHANNEL);
-    assert_null(m.z);
+    refused(&ljgap__files_ibw, b.p, b.n, "3", LJGAP_FILES_CHANNEL);
+    e = refused(&ljgap__files_ibw, b.p, b.n, "Friction", LJGAP_FILES_CHANNEL);
     assert_non_null(strstr(e.msg, "Friction"));
     free(b.p);
 }
@@ -176,15 +244,8 @@ static void test_ibw_types(void **state)
     static const unsigned types[] = {0x08, 0x48, 0x10, 0x50, 0x20, 0x60};
     for (int be = 0; be < 2; be++)
         for (size_t t = 0; t < sizeof types / sizeof types[0]; t++) {
-            igor_spec si = {.be = be,
-                            .type = types[t],
-                            .nx = 6,
-                            .ny = 4,
-                            .nl = 1,
-                            .dx = 1e-9,
-                            .dy = 1e-9,
-                            .data_unit = "m",
-                            .dim_unit = "m"};
+            igor_spec si = plain_spec(types[t], 6, 4, 1e-9);
+            si.be = be;
             wbuf bi = igor5(&si);
             assert_int_equal(ljgap__files_ibw.read(bi.p, bi.n, NULL, &m, &e), 0);
             for (size_t j = 0; j < m.ny; j++)
@@ -201,14 +262,7 @@ static void test_ibw_nan_and_v2(void **state)
     (void)state;
     ljgap__files_map m;
     ljgap__files_err e;
-    igor_spec s = {.type = 2,
-                   .nx = 5,
-                   .ny = 4,
-                   .nl = 1,
-                   .dx = 1e-8,
-                   .dy = 1e-8,
-                   .data_unit = "m",
-                   .dim_unit = "m"};
+    igor_spec s = plain_spec(2, 5, 4, 1e-8);
     wbuf b = igor5(&s);
     float nan = NAN; /* Igor's blank at (2, 1): row 4 - 1 - 1 = 2 of the map */
     memcpy(b.p + 384 + 4 * (1 * 5 + 2), &nan, 4);
@@ -265,16 +319,7 @@ static void test_ibw_bad(void **state)
     (void)state;
     ljgap__files_map m;
     ljgap__files_err e;
-    igor_spec s = {.type = 2,
-                   .nx = 9,
-                   .ny = 7,
-                   .nl = 3,
-                   .dx = 1e-8,
-                   .dy = 1e-8,
-                   .data_unit = "",
-                   .dim_unit = "m",
-                   .note = ASYLUM_NOTE,
-                   .labels = asylum_labels};
+    igor_spec s = asylum_spec(9, 7, 3);
     wbuf b = igor5(&s);
     check_truncations(&ljgap__files_ibw, b.p, b.n, 0);
     wbuf v = igor2(1, 9, "Date: 2020-02-29\r");
@@ -303,28 +348,15 @@ static void test_ibw_bad(void **state)
         wbuf c = igor5(&s);
         c.be = 0;
         put_uint_at(&c, cases[k].at, cases[k].v, cases[k].size);
-        put_uint_at(&c, 2, 0, 2);
-        unsigned sum = 0;
-        for (size_t i = 0; i < 384; i += 2)
-            sum += c.p[i] | (unsigned)c.p[i + 1] << 8;
-        put_uint_at(&c, 2, (0x10000 - (sum & 0xffff)) & 0xffff, 2);
+        igor_checksum(c.p, c.n);
         assert_true(ljgap__files_ibw.probe(c.p, c.n));
-        assert_int_equal(ljgap__files_ibw.read(c.p, c.n, NULL, &m, &e), cases[k].rc);
-        assert_null(m.z);
+        refused(&ljgap__files_ibw, c.p, c.n, NULL, cases[k].rc);
         free(c.p);
     }
     /* too many points: 4097 x 4097 int8, which is there in full */
-    igor_spec big = {.type = 8,
-                     .nx = 4097,
-                     .ny = 4097,
-                     .nl = 1,
-                     .dx = 1,
-                     .dy = 1,
-                     .data_unit = "m",
-                     .dim_unit = "m"};
+    igor_spec big = plain_spec(8, 4097, 4097, 1);
     wbuf g = igor5(&big);
-    assert_int_equal(ljgap__files_ibw.read(g.p, g.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
-    assert_null(m.z);
+    refused(&ljgap__files_ibw, g.p, g.n, NULL, LJGAP_FILES_TOOBIG);
     free(g.p);
     free(b.p);
 }
@@ -334,15 +366,8 @@ static void test_park(void **state)
     (void)state;
     ljgap__files_map m;
     ljgap__files_err e;
-    park_spec s = {.version = 2,
-                   .dtype = 2,
-                   .xres = 12,
-                   .yres = 7,
-                   .gain = 0.5,
-                   .zscale = 1,
-                   .unit = "um",
-                   .source = "Topography",
-                   .park = 1};
+    park_spec s = park_small(12, 7);
+    s.gain = 0.5;
     wbuf b = park_tiff(&s);
     assert_true(ljgap__files_park_tiff.probe(b.p, b.n));
     assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
@@ -355,16 +380,13 @@ static void test_park(void **state)
     assert_string_equal(m.z_unit, "um");
     assert_string_equal(m.acquired, "2023-04-05T06:07:08");
     assert_string_equal(m.instrument, "Park Systems");
-    for (size_t j = 0; j < 7; j++) /* stored bottom row first */
-        for (size_t i = 0; i < 12; i++)
-            assert_true(m.z[(6 - j) * 12 + i] == 0.5 * park_raw(i, j) * 1e-6);
+    check_park_points(&m, 12, 7, 0.5, 1, 0, 1e-6, 0); /* exactly */
     map_free(&m);
     assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "0", &m, &e), 0);
     map_free(&m);
     assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "topography", &m, &e), 0);
     map_free(&m);
-    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, "1", &m, &e), LJGAP_FILES_CHANNEL);
-    assert_null(m.z);
+    refused(&ljgap__files_park_tiff, b.p, b.n, "1", LJGAP_FILES_CHANNEL);
     check_truncations(&ljgap__files_park_tiff, b.p, b.n, 0);
     free(b.p);
 
@@ -381,10 +403,7 @@ static void test_park(void **state)
                     .park = 1};
     b = park_tiff(&s1);
     assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
-    for (size_t j = 0; j < 5; j++)
-        for (size_t i = 0; i < 9; i++)
-            assert_true(fabs(m.z[(4 - j) * 9 + i] - 2 * (park_raw(i, j) * 0.25 + 3) * 1e-9) <
-                        1e-24);
+    check_park_points(&m, 9, 5, 2, 0.25, 3, 1e-9, 1e-24);
     map_free(&m);
     free(b.p);
 
@@ -404,9 +423,7 @@ static void test_park(void **state)
     assert_int_equal(m.nx, 6);
     assert_int_equal(m.ny, 4);
     assert_true(fabs(m.size_x - 8e-6) < 1e-18 && fabs(m.size_y - 4e-6) < 1e-18);
-    for (size_t j = 0; j < 4; j++)
-        for (size_t i = 0; i < 6; i++)
-            assert_true(m.z[(3 - j) * 6 + i] == park_raw(i, j) * 1e-9);
+    check_park_points(&m, 6, 4, 1, 1, 0, 1e-9, 0);
     map_free(&m);
     free(b.p);
 }
@@ -416,19 +433,11 @@ static void test_park_bad(void **state)
     (void)state;
     ljgap__files_map m;
     ljgap__files_err e;
-    park_spec s = {.version = 2,
-                   .dtype = 2,
-                   .xres = 4,
-                   .yres = 3,
-                   .gain = 1,
-                   .zscale = 1,
-                   .unit = "um",
-                   .source = "Topography",
-                   .park = 0};
+    park_spec s = park_small(4, 3);
+    s.park = 0;
     wbuf b = park_tiff(&s); /* a plain TIFF: not Park's */
     assert_false(ljgap__files_park_tiff.probe(b.p, b.n));
-    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
-    assert_null(m.z);
+    refused(&ljgap__files_park_tiff, b.p, b.n, NULL, LJGAP_FILES_BAD);
     free(b.p);
     s.park = 1; /* the same file as a big-endian TIFF: not Park's */
     b = park_tiff(&s);
@@ -461,8 +470,7 @@ static void test_park_bad(void **state)
     size_t head = b.p[data_entry + 12 + 8] | (size_t)b.p[data_entry + 12 + 9] << 8;
     put_uint_at(&b, head + 100, 5000, 4);
     put_uint_at(&b, head + 104, 5000, 4);
-    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
-    assert_null(m.z);
+    refused(&ljgap__files_park_tiff, b.p, b.n, NULL, LJGAP_FILES_TOOBIG);
     free(b.p);
 }
 
@@ -496,8 +504,7 @@ static void test_plu(void **state)
         assert_int_equal(m.missing, missing);
         map_free(&m);
     }
-    assert_int_equal(ljgap__files_plu.read(b.p, b.n, "2", &m, &e), LJGAP_FILES_CHANNEL);
-    assert_null(m.z);
+    refused(&ljgap__files_plu, b.p, b.n, "2", LJGAP_FILES_CHANNEL);
     /* every cut before the last layer's min and max (which a reader does not need) */
     check_truncations(&ljgap__files_plu, b.p, b.n, 8);
     free(b.p);
@@ -510,8 +517,7 @@ static void test_plu(void **state)
     free(b.p);
     /* refused: multiple profiles (2), an unknown version, no date, TOOBIG */
     b = plu_file(4, 4, 1, 2, 0);
-    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
-    assert_int_equal(e.offset, 428);
+    assert_int_equal(refused(&ljgap__files_plu, b.p, b.n, NULL, LJGAP_FILES_BAD).offset, 428);
     free(b.p);
     b = plu_file(4, 4, 1, 3, 7);
     assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
@@ -520,8 +526,7 @@ static void test_plu(void **state)
     assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_BAD);
     b.p[3] = ' ';
     put_uint_at(&b, 500, 5000, 4), put_uint_at(&b, 504, 5000, 4);
-    assert_int_equal(ljgap__files_plu.read(b.p, b.n, NULL, &m, &e), LJGAP_FILES_TOOBIG);
-    assert_null(m.z);
+    refused(&ljgap__files_plu, b.p, b.n, NULL, LJGAP_FILES_TOOBIG);
     free(b.p);
 }
 
@@ -529,17 +534,8 @@ static void test_plu(void **state)
 static void test_probes_disjoint(void **state)
 {
     (void)state;
-    igor_spec s = {
-        .type = 2, .nx = 4, .ny = 3, .nl = 1, .dx = 1, .dy = 1, .data_unit = "m", .dim_unit = "m"};
-    park_spec p = {.version = 2,
-                   .dtype = 2,
-                   .xres = 4,
-                   .yres = 3,
-                   .gain = 1,
-                   .zscale = 1,
-                   .unit = "um",
-                   .source = "Topography",
-                   .park = 1};
+    igor_spec s = plain_spec(2, 4, 3, 1);
+    park_spec p = park_small(4, 3);
     wbuf files[3] = {igor5(&s), park_tiff(&p), plu_file(4, 3, 1, 3, 0)};
     for (int f = 0; f < 3; f++) {
         for (int r = 0; r < 3; r++)
@@ -559,25 +555,8 @@ static void test_probes_disjoint(void **state)
 static void test_mutations(void **state)
 {
     (void)state;
-    igor_spec s = {.type = 2,
-                   .nx = 5,
-                   .ny = 4,
-                   .nl = 2,
-                   .dx = 1e-8,
-                   .dy = 1e-8,
-                   .data_unit = "",
-                   .dim_unit = "m",
-                   .note = ASYLUM_NOTE,
-                   .labels = asylum_labels};
-    park_spec p = {.version = 2,
-                   .dtype = 2,
-                   .xres = 5,
-                   .yres = 4,
-                   .gain = 1,
-                   .zscale = 1,
-                   .unit = "um",
-                   .source = "Topography",
-                   .park = 1};
+    igor_spec s = asylum_spec(5, 4, 2);
+    park_spec p = park_small(5, 4);
     wbuf files[3] = {igor5(&s), park_tiff(&p), plu_file(5, 4, 2, 3, 0)};
     long ok = 0, refused = 0;
     for (int f = 0; f < 3; f++) {
@@ -588,14 +567,8 @@ static void test_mutations(void **state)
             for (int v = 0; v < 4; v++) {
                 memcpy(t, files[f].p, n);
                 t[pos] = v == 0 ? 0 : v == 1 ? 0xff : v == 2 ? (unsigned char)~t[pos] : 0x7f;
-                if (f == 0 && pos < 384 && (pos < 2 || pos > 3)) { /* past the checksum */
-                    wbuf c = {.p = t, .n = n, .cap = n};
-                    unsigned sum = 0;
-                    put_uint_at(&c, 2, 0, 2);
-                    for (size_t i = 0; i < 384; i += 2)
-                        sum += t[i] | (unsigned)t[i + 1] << 8;
-                    put_uint_at(&c, 2, (0x10000 - (sum & 0xffff)) & 0xffff, 2);
-                }
+                if (f == 0 && pos < 384 && (pos < 2 || pos > 3)) /* past the checksum */
+                    igor_checksum(t, n);
                 (void)readers[f]->probe(t, n);
                 ljgap__files_map m;
                 ljgap__files_err e;
