@@ -79,6 +79,17 @@ void ljgap__files_put(ljgap__files_map *map, size_t k, double v)
         map->z[k] = NAN, map->missing++;
 }
 
+int ljgap__files_read_within(int (*read_file)(const unsigned char *, size_t, const char *,
+                                              ljgap__files_map *, ljgap__files_err *),
+                             const unsigned char *buf, size_t len, const char *channel,
+                             ljgap__files_map *map, ljgap__files_err *err)
+{
+    err->offset = -1;
+    int rc = read_file(buf, len, channel, map, err);
+    if (rc == LJGAP_FILES_BAD && err->offset > (long)len) err->offset = (long)len;
+    return rc;
+}
+
 void ljgap__files_add_channel(ljgap__files_map *map, const char *title)
 {
     if (map->n_channels >= LJGAP_FILES_MAX_CHANNELS) return;

@@ -27,6 +27,13 @@ int ljgap__files_alloc_at(ljgap__files_map *map, size_t nx, size_t ny, ljgap__fi
                           long offset);
 /* Stores a height at map->z[k]: a non-finite value is a missing point (NaN, counted). */
 void ljgap__files_put(ljgap__files_map *map, size_t k, double v);
+/* A reader's read: read_file(buf, len, channel, map, err) with err->offset -1 to start with, and
+ * a LJGAP_FILES_BAD fault's offset past the file's end (a length or an offset read from a
+ * header may point there) put where the file ends. Returns read_file's code. */
+int ljgap__files_read_within(int (*read_file)(const unsigned char *, size_t, const char *,
+                                              ljgap__files_map *, ljgap__files_err *),
+                             const unsigned char *buf, size_t len, const char *channel,
+                             ljgap__files_map *map, ljgap__files_err *err);
 /* Appends a channel title (at most LJGAP_FILES_MAX_CHANNELS are kept). */
 void ljgap__files_add_channel(ljgap__files_map *map, const char *title);
 /* s[0..n) into out, trimmed, bytes outside printable ASCII as '?'. */

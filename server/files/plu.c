@@ -139,15 +139,11 @@ static int read_file(const unsigned char *buf, size_t len, const char *channel,
     return 0;
 }
 
-/* The reader: read_file, with a fault's offset kept inside the file (a length or an offset
- * read from a header may point past its end: the fault is then where the file ends). */
+/* The reader: read_file, a fault's offset kept inside the file (files_util.h). */
 static int plu_read(const unsigned char *buf, size_t len, const char *channel, ljgap__files_map *map,
                     ljgap__files_err *err)
 {
-    err->offset = -1;
-    int rc = read_file(buf, len, channel, map, err);
-    if (rc == LJGAP_FILES_BAD && err->offset > (long)len) err->offset = (long)len;
-    return rc;
+    return ljgap__files_read_within(read_file, buf, len, channel, map, err);
 }
 
 const ljgap__files_format ljgap__files_plu = {
