@@ -390,42 +390,43 @@ static void test_park(void **state)
     check_truncations(&ljgap__files_park_tiff, b.p, b.n, 0);
     free(b.p);
 
-    /* version 1: int16, z scale and offset, nm */
-    park_spec s1 = {.version = 1,
-                    .dtype = 0,
-                    .xres = 9,
-                    .yres = 5,
-                    .gain = 2,
-                    .zscale = 0.25,
-                    .zoff = 3,
-                    .unit = "nm",
-                    .source = "Z Height",
-                    .park = 1};
-    b = park_tiff(&s1);
-    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
-    check_park_points(&m, 9, 5, 2, 0.25, 3, 1e-9, 1e-24);
-    map_free(&m);
-    free(b.p);
-
-    /* version 2 int32 with swap_xy (the fast axis was y): stored in image order all the same */
-    park_spec s2 = {.version = 2,
-                    .dtype = 1,
-                    .xres = 6,
-                    .yres = 4,
-                    .gain = 1,
-                    .zscale = 1,
-                    .unit = "nm",
-                    .source = "Height",
-                    .swap = 1,
-                    .park = 1};
-    b = park_tiff(&s2);
-    assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
-    assert_int_equal(m.nx, 6);
-    assert_int_equal(m.ny, 4);
-    assert_true(fabs(m.size_x - 8e-6) < 1e-18 && fabs(m.size_y - 4e-6) < 1e-18);
-    check_park_points(&m, 6, 4, 1, 1, 0, 1e-9, 0);
-    map_free(&m);
-    free(b.p);
+    /* version 1: int16, z scale and offset, nm; version 2 int32 with swap_xy (the fast axis was
+     * y): stored in image order all the same */
+    static const struct {
+        park_spec s;
+        double tol;
+    } more[] = {{{.version = 1,
+                  .dtype = 0,
+                  .xres = 9,
+                  .yres = 5,
+                  .gain = 2,
+                  .zscale = 0.25,
+                  .zoff = 3,
+                  .unit = "nm",
+                  .source = "Z Height",
+                  .park = 1},
+                 1e-24},
+                {{.version = 2,
+                  .dtype = 1,
+                  .xres = 6,
+                  .yres = 4,
+                  .gain = 1,
+                  .zscale = 1,
+                  .unit = "nm",
+                  .source = "Height",
+                  .swap = 1,
+                  .park = 1},
+                 0}};
+    for (size_t k = 0; k < sizeof more / sizeof more[0]; k++) {
+        const park_spec *sk = &more[k].s;
+        b = park_tiff(sk);
+        assert_int_equal(ljgap__files_park_tiff.read(b.p, b.n, NULL, &m, &e), 0);
+        assert_true(fabs(m.size_x - 8e-6) < 1e-18 && fabs(m.size_y - 4e-6) < 1e-18);
+        check_park_points(&m, sk->xres, sk->yres, sk->gain, sk->zscale, sk->zoff, 1e-9,
+                          more[k].tol);
+        map_free(&m);
+        free(b.p);
+    }
 }
 
 static void test_park_bad(void **state)
